@@ -1,0 +1,91 @@
+//! The library's error type: every variant names the field, value or place that caused it.
+
+/// Everything that can go wrong while building or running a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A scene or function argument is out of its admissible range.
+    #[error("invalid {field} = {value}: {reason}")]
+    InvalidInput {
+        /// Dotted path of the offending field, e.g. `laminate.pairs`.
+        field: String,
+        /// The offending value as written.
+        value: String,
+        /// Why it was rejected.
+        reason: String,
+    },
+    /// A material whose plane elasticity matrix is not positive definite, or whose constants are inadmissible.
+    #[error("material '{name}' rejected: {reason}")]
+    Material {
+        /// Material name.
+        name: String,
+        /// Why it was rejected.
+        reason: String,
+    },
+    /// Mesh construction or mesh-quality failure.
+    #[error("mesh: {0}")]
+    Mesh(String),
+    /// The requested explicit time step exceeds the stability limit.
+    #[error("time step dt = {dt_s:.4e} s exceeds the explicit stability limit dt_crit = {dt_crit_s:.4e} s (dt/dt_crit = {ratio:.3}); lower dt or force the run")]
+    StepTooLarge {
+        /// Requested step.
+        dt_s: f64,
+        /// Estimated critical step.
+        dt_crit_s: f64,
+        /// dt / dt_crit.
+        ratio: f64,
+    },
+    /// A run blew up; it was stopped before writing non-finite results.
+    #[error("run unstable at step {step} (t = {time_s:.4e} s): {reason}; dt = {dt_s:.4e} s, dt_crit = {dt_crit_s:.4e} s")]
+    Unstable {
+        /// Step at which the blow-up was detected.
+        step: usize,
+        /// Time of that step.
+        time_s: f64,
+        /// What was detected.
+        reason: String,
+        /// The run's step.
+        dt_s: f64,
+        /// The estimated critical step.
+        dt_crit_s: f64,
+    },
+    /// The contact algorithm failed (for example an augmented-Lagrangian penalty above its stable bound).
+    #[error("contact: {0}")]
+    Contact(String),
+    /// Signal processing error.
+    #[error(transparent)]
+    Signal(#[from] crate::signal::SignalError),
+    /// Writing an output file failed.
+    #[error(transparent)]
+    Output(#[from] crate::io::OutputError),
+    /// Rendering a figure failed.
+    #[error(transparent)]
+    Plot(#[from] crate::plot::PlotError),
+}
+
+/// Library result type.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// Shorthand for [`Error::InvalidInput`].
+    pub fn invalid(field: impl Into<String>, value: impl std::fmt::Display, reason: impl Into<String>) -> Self {
+        Error::InvalidInput { field: field.into(), value: value.to_string(), reason: reason.into() }
+    }
+}
+
+/// Checks that `value` is finite and strictly positive, naming `field` otherwise.
+pub fn require_positive(field: &str, value: f64) -> Result<f64> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::invalid(field, value, "must be finite and > 0"))
+    }
+}
+
+/// Checks that `value` is finite, naming `field` otherwise.
+pub fn require_finite(field: &str, value: f64) -> Result<f64> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::invalid(field, value, "must be finite"))
+    }
+}

@@ -1,0 +1,19 @@
+//! trnews: 2D finite element simulation of elastic waves in a layered CFRP laminate with a
+//! contacting crack, and the TR-NEWS signal processing of the report
+//! "Simulation of defects in CFRP and delayed TR-NEWS analysis" (Mech 320/17).
+//!
+//! Data flows one way: [`laminate`] -> [`mesh`] -> [`fem`] -> [`solve`] -> [`signal`] /
+//! [`trnews`] -> [`plot`] / [`io`]. [`scene`] describes a whole experiment setup.
+
+pub mod error;
+pub mod fem;
+pub mod io;
+pub mod laminate;
+pub mod material;
+pub mod mesh;
+pub mod plot;
+pub mod signal;
+pub mod solve;
+pub mod contact;
+
+pub use error::{Error, Result};

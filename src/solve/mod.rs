@@ -1,0 +1,303 @@
+//! Time integration (report Sec. 4.8): explicit central difference with lumped mass
+//! (eqs 65-69) and Newmark average acceleration (eq 61), with sources, receivers, the
+//! energy ledger (Sec. 4.10.1), stability checks and a serialisable run report.
+
+mod explicit;
+mod ledger;
+mod newmark;
+pub mod stability;
+
+use crate::contact::{ContactOptions, ContactReport};
+use crate::error::{require_positive, Error, Result};
+use crate::fem::Model;
+use crate::mesh::Mesh;
+use crate::signal::Signal;
+pub use ledger::EnergyLedger;
+use serde::{Deserialize, Serialize};
+pub use stability::StabilityEstimate;
+
+/// Which integrator advances the model.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Integrator {
+    /// Central difference with lumped mass (eqs 65-69), conditionally stable.
+    #[default]
+    Explicit,
+    /// Newmark average acceleration (eq 61), unconditionally stable, one sparse Cholesky.
+    Newmark {
+        /// Consistent (true) or lumped (false) mass.
+        consistent_mass: bool,
+    },
+}
+
+/// A force source: nodal weights times a signal (report Sec. 5.1: a traction on the
+/// transmitter segment). The force on DOF d at time t is `weight_d * signal(t)`.
+#[derive(Clone, Debug)]
+pub struct Source {
+    /// (DOF, weight): the traction direction times the node's share of the segment length (m).
+    pub weights: Vec<(usize, f64)>,
+    /// The traction history (Pa), resampled to the solver step when its interval differs.
+    pub signal: Signal,
+}
+
+/// What a receiver records.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Quantity {
+    /// Displacement (m).
+    #[default]
+    Displacement,
+    /// Velocity (m/s), central difference (u_{n+1} - u_{n-1}) / (2 dt).
+    Velocity,
+}
+
+/// A receiver: a weighted average of DOFs (one node, or a transducer face).
+#[derive(Clone, Debug)]
+pub struct Receiver {
+    /// Name used in outputs.
+    pub name: String,
+    /// (DOF, weight), weights summing to 1.
+    pub weights: Vec<(usize, f64)>,
+    /// Recorded quantity.
+    pub quantity: Quantity,
+}
+
+/// Options of one run.
+#[derive(Clone, Debug)]
+pub struct RunConfig {
+    /// Time step; `None` takes `step_safety * dt_crit` (explicit) (s).
+    pub dt_s: Option<f64>,
+    /// Fraction of dt_crit used when `dt_s` is `None`.
+    pub step_safety: f64,
+    /// Simulated duration (s).
+    pub duration_s: f64,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Run even if dt > dt_crit (explicit), to study instability.
+    pub force: bool,
+    /// Evaluate the energy ledger and the blow-up check every this many steps.
+    pub ledger_every: usize,
+    /// Keep a displacement snapshot every this many steps.
+    pub snapshot_every: Option<usize>,
+    /// Record the crack-face node traces.
+    pub record_crack: bool,
+    /// Contact on the crack faces; `None` leaves a crack open (faces pass through each other).
+    pub contact: Option<ContactOptions>,
+    /// Initial displacement (tests: free vibration), zero if `None`.
+    pub initial_displacement: Option<Vec<f64>>,
+    /// Show a progress bar on a terminal.
+    pub progress: bool,
+    /// A precomputed stability estimate for this model, to skip the power iteration.
+    pub stability: Option<StabilityEstimate>,
+}
+
+impl Default for RunConfig {
+    fn default() -> Self {
+        RunConfig {
+            dt_s: None,
+            step_safety: 0.9,
+            duration_s: 60e-6,
+            integrator: Integrator::Explicit,
+            force: false,
+            ledger_every: 20,
+            snapshot_every: None,
+            record_crack: false,
+            contact: None,
+            initial_displacement: None,
+            progress: false,
+            stability: None,
+        }
+    }
+}
+
+/// What every run reports: cost and error indicators.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunReport {
+    /// Integrator used.
+    pub integrator: String,
+    /// Wall-clock time of the time loop (s).
+    pub wall_time_s: f64,
+    /// Wall-clock time of setup: stability estimate, factorisation (s).
+    pub setup_time_s: f64,
+    /// Steps taken.
+    pub steps: usize,
+    /// Degrees of freedom.
+    pub dofs: usize,
+    /// Time step (s).
+    pub dt_s: f64,
+    /// Estimated critical explicit step (s).
+    pub dt_crit_s: f64,
+    /// dt / dt_crit (above 1 only when forced, or with Newmark).
+    pub stability_ratio: f64,
+    /// Final energy-balance residual relative to the input energy.
+    pub energy_residual: f64,
+    /// Largest relative energy-balance residual over the run.
+    pub energy_residual_peak: f64,
+    /// Work done by the sources (J per m of thickness).
+    pub source_work_j: f64,
+    /// Contact diagnostics, when contact was active.
+    pub contact: Option<ContactReport>,
+}
+
+/// Displacement of the crack faces at every step.
+#[derive(Clone, Debug, Serialize)]
+pub struct CrackTraces {
+    /// x of each pair (m).
+    pub x_m: Vec<f64>,
+    /// Normal gap g_N = u_y(slave) - u_y(master) per pair, one signal each (m; > 0 is penetration).
+    pub normal_gap: Vec<Signal>,
+    /// Vertical displacement of the upper face (master) per pair (m).
+    pub master_uy: Vec<Signal>,
+    /// Vertical displacement of the lower face (slave) per pair (m).
+    pub slave_uy: Vec<Signal>,
+}
+
+/// A full displacement field at one time.
+#[derive(Clone, Debug, Serialize)]
+pub struct Snapshot {
+    /// Time (s).
+    pub time_s: f64,
+    /// Displacement, 2 values per node (m).
+    pub displacement: Vec<f64>,
+}
+
+/// Everything a run produces.
+#[derive(Clone, Debug)]
+pub struct RunOutput {
+    /// Cost and error indicators.
+    pub report: RunReport,
+    /// One trace per receiver, in receiver order, sampled at the solver step from t = 0.
+    pub traces: Vec<Signal>,
+    /// Receiver names, in order.
+    pub receiver_names: Vec<String>,
+    /// Crack-face traces when asked and there is a crack.
+    pub crack: Option<CrackTraces>,
+    /// Snapshots when asked.
+    pub snapshots: Vec<Snapshot>,
+    /// Energy ledger time series.
+    pub ledger: EnergyLedger,
+}
+
+/// Runs the model with the given sources and receivers.
+pub fn run(model: &Model, sources: &[Source], receivers: &[Receiver], config: &RunConfig) -> Result<RunOutput> {
+    require_positive("duration_s", config.duration_s)?;
+    if let Some(dt) = config.dt_s {
+        require_positive("dt_s", dt)?;
+    }
+    if !(config.step_safety > 0.0 && config.step_safety <= 1.0) {
+        return Err(Error::invalid("step_safety", config.step_safety, "must be in (0, 1]"));
+    }
+    if config.ledger_every == 0 {
+        return Err(Error::invalid("ledger_every", 0, "must be at least 1"));
+    }
+    validate_weights(model, sources.iter().map(|s| ("source", &s.weights)))?;
+    validate_weights(model, receivers.iter().map(|r| ("receiver", &r.weights)))?;
+    if let Some(u0) = &config.initial_displacement {
+        if u0.len() != model.dofs() || u0.iter().any(|v| !v.is_finite()) {
+            return Err(Error::invalid("initial_displacement", u0.len(), format!("needs {} finite values", model.dofs())));
+        }
+    }
+    match config.integrator {
+        Integrator::Explicit => explicit::run(model, sources, receivers, config),
+        Integrator::Newmark { consistent_mass } => {
+            if config.contact.is_some() && model.crack.is_some() {
+                return Err(Error::invalid("integrator", "newmark", "contact is implemented for the explicit integrator only"));
+            }
+            newmark::run(model, sources, receivers, config, consistent_mass)
+        }
+    }
+}
+
+fn validate_weights<'a>(model: &Model, sets: impl Iterator<Item = (&'a str, &'a Vec<(usize, f64)>)>) -> Result<()> {
+    for (i, (what, w)) in sets.enumerate() {
+        if w.is_empty() {
+            return Err(Error::invalid(format!("{what}[{i}]"), "no DOFs", "selects no node of the mesh"));
+        }
+        if let Some(&(d, v)) = w.iter().find(|(d, v)| *d >= model.dofs() || !v.is_finite()) {
+            return Err(Error::invalid(format!("{what}[{i}]"), format!("DOF {d} weight {v}"), format!("DOF must be < {} and weight finite", model.dofs())));
+        }
+    }
+    Ok(())
+}
+
+/// The source signals evaluated at every solver step t_n = n dt, n < steps.
+fn sample_sources(sources: &[Source], dt: f64, steps: usize) -> Result<Vec<Vec<f64>>> {
+    sources
+        .iter()
+        .map(|s| {
+            let sig = if ((s.signal.dt_s - dt) / dt).abs() < 1e-9 { s.signal.clone() } else { crate::signal::resample(&s.signal, dt)? };
+            Ok((0..steps)
+                .map(|n| {
+                    let k = ((n as f64 * dt - sig.t0_s) / dt).round();
+                    if k >= 0.0 && (k as usize) < sig.samples.len() {
+                        sig.samples[k as usize]
+                    } else {
+                        0.0
+                    }
+                })
+                .collect())
+        })
+        .collect()
+}
+
+/// Nodal weights of a segment: each edge between consecutive `nodes` gives half its length
+/// to each end node (the consistent load of a uniform traction on linear edges).
+pub fn segment_shares(mesh: &Mesh, nodes: &[usize]) -> Vec<(usize, f64)> {
+    let mut w: Vec<(usize, f64)> = nodes.iter().map(|&n| (n, 0.0)).collect();
+    for k in 0..nodes.len().saturating_sub(1) {
+        let (a, b) = (mesh.nodes[nodes[k]], mesh.nodes[nodes[k + 1]]);
+        let half = 0.5 * (b[0] - a[0]).hypot(b[1] - a[1]);
+        w[k].1 += half;
+        w[k + 1].1 += half;
+    }
+    w
+}
+
+/// A traction source on the boundary segment p..q in direction `angle_deg` (counter-clockwise
+/// from +x): force on each node = signal(t) * (cos, sin) * the node's length share.
+pub fn traction_source(mesh: &Mesh, p: [f64; 2], q: [f64; 2], angle_deg: f64, signal: Signal) -> Result<Source> {
+    let nodes = mesh.nodes_on_segment(p, q);
+    if nodes.len() < 2 {
+        return Err(Error::invalid("source.segment", format!("{p:?}..{q:?}"), "covers fewer than two mesh nodes"));
+    }
+    let (s, c) = angle_deg.to_radians().sin_cos();
+    let weights = segment_shares(mesh, &nodes).into_iter().flat_map(|(n, l)| [(2 * n, c * l), (2 * n + 1, s * l)]).collect();
+    Ok(Source { weights, signal })
+}
+
+/// A point-force source on one node's DOF (tests and impulse responses).
+pub fn point_source(node: usize, component: usize, signal: Signal) -> Source {
+    Source { weights: vec![(2 * node + component, 1.0)], signal }
+}
+
+/// A receiver of component `component` (0 = x, 1 = y) averaged over the segment p..q
+/// (a transducer face), or at the nearest node when p == q.
+pub fn segment_receiver(mesh: &Mesh, name: &str, p: [f64; 2], q: [f64; 2], component: usize, quantity: Quantity) -> Result<Receiver> {
+    let (x0, x1, y0, y1) = mesh.bounds();
+    let tol = mesh.tolerance();
+    for pt in [p, q] {
+        if !(pt[0] >= x0 - tol && pt[0] <= x1 + tol && pt[1] >= y0 - tol && pt[1] <= y1 + tol) {
+            return Err(Error::invalid(format!("receiver '{name}'"), format!("({}, {}) m", pt[0], pt[1]), format!("is outside the domain x [{x0}, {x1}], y [{y0}, {y1}]")));
+        }
+    }
+    let nodes = if p == q { vec![mesh.nearest_node(p)] } else { mesh.nodes_on_segment(p, q) };
+    let shares = if nodes.len() == 1 { vec![(nodes[0], 1.0)] } else { segment_shares(mesh, &nodes) };
+    let total: f64 = shares.iter().map(|s| s.1).sum();
+    if nodes.is_empty() || total <= 0.0 {
+        return Err(Error::invalid(format!("receiver '{name}'"), format!("{p:?}..{q:?}"), "covers no mesh node"));
+    }
+    Ok(Receiver { name: name.into(), weights: shares.into_iter().map(|(n, w)| (2 * n + component, w / total)).collect(), quantity })
+}
+
+/// A progress bar on stderr when `show` and stderr is a terminal; hidden otherwise.
+fn progress_bar(show: bool, steps: usize) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !show || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(steps as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} steps ({eta} left)") {
+        bar.set_style(style);
+    }
+    bar
+}
