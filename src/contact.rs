@@ -48,7 +48,10 @@ pub struct ContactOptions {
 
 impl Default for ContactOptions {
     fn default() -> Self {
-        ContactOptions { method: ContactMethod::Exact, friction: 0.6 }
+        ContactOptions {
+            method: ContactMethod::Exact,
+            friction: 0.6,
+        }
     }
 }
 
@@ -105,27 +108,61 @@ pub struct ContactSolver {
 
 impl ContactSolver {
     /// Prepares contact for `crack` given the per-DOF compliance D = dt^2 / m_eff.
-    pub fn new(crack: &Crack, compliance: &[f64], options: ContactOptions, steps: usize) -> Result<ContactSolver> {
+    pub fn new(
+        crack: &Crack,
+        compliance: &[f64],
+        options: ContactOptions,
+        steps: usize,
+    ) -> Result<ContactSolver> {
         if !(options.friction.is_finite() && options.friction >= 0.0) {
-            return Err(Error::invalid("contact.friction", options.friction, "must be finite and >= 0"));
+            return Err(Error::invalid(
+                "contact.friction",
+                options.friction,
+                "must be finite and >= 0",
+            ));
         }
-        if let ContactMethod::AugmentedLagrangian { penalty_scale, tolerance_m, max_iterations } = options.method {
+        if let ContactMethod::AugmentedLagrangian {
+            penalty_scale,
+            tolerance_m,
+            max_iterations,
+        } = options.method
+        {
             if !(penalty_scale.is_finite() && penalty_scale > 0.0) {
-                return Err(Error::invalid("contact.penalty_scale", penalty_scale, "must be finite and > 0"));
+                return Err(Error::invalid(
+                    "contact.penalty_scale",
+                    penalty_scale,
+                    "must be finite and > 0",
+                ));
             }
             if !(tolerance_m.is_finite() && tolerance_m > 0.0) {
-                return Err(Error::invalid("contact.tolerance_m", tolerance_m, "must be finite and > 0"));
+                return Err(Error::invalid(
+                    "contact.tolerance_m",
+                    tolerance_m,
+                    "must be finite and > 0",
+                ));
             }
             if max_iterations == 0 {
-                return Err(Error::invalid("contact.max_iterations", 0, "must be at least 1"));
+                return Err(Error::invalid(
+                    "contact.max_iterations",
+                    0,
+                    "must be at least 1",
+                ));
             }
         }
         let pairs: Vec<PairDofs> = crack
             .pairs
             .iter()
             .map(|p| {
-                let (m, s) = ([2 * p.master, 2 * p.master + 1], [2 * p.slave, 2 * p.slave + 1]);
-                PairDofs { master: m, slave: s, d_master: m.map(|d| compliance[d]), d_slave: s.map(|d| compliance[d]) }
+                let (m, s) = (
+                    [2 * p.master, 2 * p.master + 1],
+                    [2 * p.slave, 2 * p.slave + 1],
+                );
+                PairDofs {
+                    master: m,
+                    slave: s,
+                    d_master: m.map(|d| compliance[d]),
+                    d_slave: s.map(|d| compliance[d]),
+                }
             })
             .collect();
         let n = pairs.len();
@@ -136,7 +173,15 @@ impl ContactSolver {
             slipping: Vec::with_capacity(steps),
             ..Default::default()
         };
-        Ok(ContactSolver { options, pairs, stick_gap: vec![0.0; n], gap: vec![0.0; n], force: vec![PairForce::default(); n], report, iterations_total: 0 })
+        Ok(ContactSolver {
+            options,
+            pairs,
+            stick_gap: vec![0.0; n],
+            gap: vec![0.0; n],
+            force: vec![PairForce::default(); n],
+            report,
+            iterations_total: 0,
+        })
     }
 
     /// Sets the stick points to the current tangential gaps (start of a run).
@@ -167,6 +212,12 @@ impl ContactSolver {
             }
             contact += 1;
             let d_t = p.d_slave[0] + p.d_master[0];
+            if d_t <= 0.0 {
+                // both tangential DOFs are fixed: nothing can slip
+                stick += 1;
+                self.force[k].tangential = 0.0;
+                continue;
+            }
             let trial = (g_t - self.stick_gap[k]) / d_t;
             let lambda_t = if trial.abs() <= mu * lambda_n {
                 stick += 1;
@@ -196,19 +247,33 @@ impl ContactSolver {
             ContactMethod::Exact => {
                 let mut touching = 0;
                 for (k, p) in self.pairs.iter().enumerate() {
-                    let lambda = (self.gap[k] / (p.d_slave[1] + p.d_master[1])).max(0.0);
+                    let d = p.d_slave[1] + p.d_master[1];
+                    let lambda = if d > 0.0 {
+                        (self.gap[k] / d).max(0.0)
+                    } else {
+                        0.0
+                    };
                     touching += (lambda > 0.0) as usize;
                     self.force[k].normal = lambda;
                 }
                 Ok((touching > 0) as usize)
             }
-            ContactMethod::AugmentedLagrangian { penalty_scale, tolerance_m, max_iterations } => self.augmented_lagrangian(penalty_scale, tolerance_m, max_iterations),
+            ContactMethod::AugmentedLagrangian {
+                penalty_scale,
+                tolerance_m,
+                max_iterations,
+            } => self.augmented_lagrangian(penalty_scale, tolerance_m, max_iterations),
         }
     }
 
     /// lambda_N <- max(0, lambda_N + b g_N(lambda)) until the constraint residual (the
     /// penetration, and the opening of pairs still carrying force) has L2 norm < tolerance.
-    fn augmented_lagrangian(&mut self, scale: f64, tolerance: f64, max_iterations: usize) -> Result<usize> {
+    fn augmented_lagrangian(
+        &mut self,
+        scale: f64,
+        tolerance: f64,
+        max_iterations: usize,
+    ) -> Result<usize> {
         for f in &mut self.force {
             f.normal = 0.0;
         }
@@ -244,7 +309,11 @@ impl ContactSolver {
             .zip(&self.gap)
             .map(|((p, f), g)| {
                 let r = g - (p.d_slave[1] + p.d_master[1]) * f.normal;
-                if f.normal > 0.0 { r * r } else { r.max(0.0).powi(2) }
+                if f.normal > 0.0 {
+                    r * r
+                } else {
+                    r.max(0.0).powi(2)
+                }
             })
             .sum();
         sum.sqrt()

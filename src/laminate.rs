@@ -99,12 +99,19 @@ const MAX_REJECTIONS: u32 = 1000;
 impl StochasticSpec {
     fn validate(&self) -> Result<()> {
         if self.pairs == 0 {
-            return Err(Error::invalid("laminate.pairs", self.pairs, "must be at least 1"));
+            return Err(Error::invalid(
+                "laminate.pairs",
+                self.pairs,
+                "must be at least 1",
+            ));
         }
         require_positive("laminate.a_mean_m", self.a_mean_m)?;
         require_positive("laminate.b_mean_m", self.b_mean_m)?;
         require_positive("laminate.min_epoxy_m", self.min_epoxy_m)?;
-        for (field, v) in [("laminate.a_std_m", self.a_std_m), ("laminate.b_std_m", self.b_std_m)] {
+        for (field, v) in [
+            ("laminate.a_std_m", self.a_std_m),
+            ("laminate.b_std_m", self.b_std_m),
+        ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::invalid(field, v, "must be finite and >= 0"));
             }
@@ -113,7 +120,12 @@ impl StochasticSpec {
     }
 
     /// Draws a positive value from N(mean, std), counting rejected non-positive draws.
-    fn draw_positive(dist: &Normal<f64>, rng: &mut ChaCha8Rng, field: &str, rejected: &mut u32) -> Result<f64> {
+    fn draw_positive(
+        dist: &Normal<f64>,
+        rng: &mut ChaCha8Rng,
+        field: &str,
+        rejected: &mut u32,
+    ) -> Result<f64> {
         loop {
             let v = dist.sample(rng);
             if v > 0.0 {
@@ -121,13 +133,22 @@ impl StochasticSpec {
             }
             *rejected += 1;
             if *rejected > MAX_REJECTIONS {
-                return Err(Error::invalid(field, v, "distribution yields almost only non-positive values"));
+                return Err(Error::invalid(
+                    field,
+                    v,
+                    "distribution yields almost only non-positive values",
+                ));
             }
         }
     }
 
     /// Draws one pair (steps 1-3 of the report's procedure).
-    fn draw_pair(&self, a_dist: &Normal<f64>, b_dist: &Normal<f64>, rng: &mut ChaCha8Rng) -> Result<PairDraw> {
+    fn draw_pair(
+        &self,
+        a_dist: &Normal<f64>,
+        b_dist: &Normal<f64>,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<PairDraw> {
         let mut rejected_draws = 0;
         let a_m = Self::draw_positive(a_dist, rng, "laminate.a_mean_m", &mut rejected_draws)?;
         let b_m = Self::draw_positive(b_dist, rng, "laminate.b_mean_m", &mut rejected_draws)?;
@@ -168,30 +189,58 @@ impl Laminate {
         // Pair 0 is at the top: build top-down, then reverse to bottom-up order.
         let mut layers = Vec::with_capacity(2 * draws.len());
         for (i, d) in draws.iter().enumerate() {
-            layers.push(Layer { material: 1 + i % 2, thickness_m: d.composite_m });
-            layers.push(Layer { material: 0, thickness_m: d.epoxy_m });
+            layers.push(Layer {
+                material: 1 + i % 2,
+                thickness_m: d.composite_m,
+            });
+            layers.push(Layer {
+                material: 0,
+                thickness_m: d.epoxy_m,
+            });
         }
         layers.reverse();
-        Ok(Laminate { materials, layers, draws })
+        Ok(Laminate {
+            materials,
+            layers,
+            draws,
+        })
     }
 
     /// A deterministic stack from (material, thickness) pairs listed bottom-up.
     pub fn from_layers(materials: Vec<Material>, layers: Vec<Layer>) -> Result<Laminate> {
         if layers.is_empty() {
-            return Err(Error::invalid("laminate.layers", "[]", "needs at least one layer"));
+            return Err(Error::invalid(
+                "laminate.layers",
+                "[]",
+                "needs at least one layer",
+            ));
         }
         for (i, l) in layers.iter().enumerate() {
             require_positive(&format!("laminate.layers[{i}].thickness_m"), l.thickness_m)?;
             if l.material >= materials.len() {
-                return Err(Error::invalid(format!("laminate.layers[{i}].material"), l.material, "no such material"));
+                return Err(Error::invalid(
+                    format!("laminate.layers[{i}].material"),
+                    l.material,
+                    "no such material",
+                ));
             }
         }
-        Ok(Laminate { materials, layers, draws: Vec::new() })
+        Ok(Laminate {
+            materials,
+            layers,
+            draws: Vec::new(),
+        })
     }
 
     /// A single homogeneous layer.
     pub fn homogeneous(material: Material, thickness_m: f64) -> Result<Laminate> {
-        Self::from_layers(vec![material], vec![Layer { material: 0, thickness_m }])
+        Self::from_layers(
+            vec![material],
+            vec![Layer {
+                material: 0,
+                thickness_m,
+            }],
+        )
     }
 
     /// Total thickness (m).
@@ -213,7 +262,11 @@ impl Laminate {
         if self.draws.is_empty() {
             return 0.0;
         }
-        let clamped = self.draws.iter().filter(|d| d.epoxy_m > d.epoxy_drawn_m).count();
+        let clamped = self
+            .draws
+            .iter()
+            .filter(|d| d.epoxy_m > d.epoxy_drawn_m)
+            .count();
         clamped as f64 / self.draws.len() as f64
     }
 }
@@ -234,17 +287,33 @@ mod tests {
         // 20000 pairs: the standard error of the mean is std/sqrt(n) = 0.7% of std; of the
         // std about std/sqrt(2n) = 0.5%. We allow 4 standard errors. Truncation of negative
         // draws is negligible here (a and b are > 5 std above zero).
-        let spec = StochasticSpec { pairs: 20_000, seed: 7, ..Default::default() };
+        let spec = StochasticSpec {
+            pairs: 20_000,
+            seed: 7,
+            ..Default::default()
+        };
         let lam = Laminate::stochastic(&spec, Plane::Strain).unwrap();
         let n = spec.pairs as f64;
         let a: Vec<f64> = lam.draws.iter().map(|d| d.a_m).collect();
         let b: Vec<f64> = lam.draws.iter().map(|d| d.b_m).collect();
         let (am, asd) = mean_std(&a);
         let (bm, bsd) = mean_std(&b);
-        assert!((am - spec.a_mean_m).abs() < 4.0 * spec.a_std_m / n.sqrt(), "a mean {am}");
-        assert!((bm - spec.b_mean_m).abs() < 4.0 * spec.b_std_m / n.sqrt(), "b mean {bm}");
-        assert!((asd - spec.a_std_m).abs() < 4.0 * spec.a_std_m / (2.0 * n).sqrt(), "a std {asd}");
-        assert!((bsd - spec.b_std_m).abs() < 4.0 * spec.b_std_m / (2.0 * n).sqrt(), "b std {bsd}");
+        assert!(
+            (am - spec.a_mean_m).abs() < 4.0 * spec.a_std_m / n.sqrt(),
+            "a mean {am}"
+        );
+        assert!(
+            (bm - spec.b_mean_m).abs() < 4.0 * spec.b_std_m / n.sqrt(),
+            "b mean {bm}"
+        );
+        assert!(
+            (asd - spec.a_std_m).abs() < 4.0 * spec.a_std_m / (2.0 * n).sqrt(),
+            "a std {asd}"
+        );
+        assert!(
+            (bsd - spec.b_std_m).abs() < 4.0 * spec.b_std_m / (2.0 * n).sqrt(),
+            "b std {bsd}"
+        );
         // x ~ U(0, a): x/a has mean 1/2 and std 1/sqrt(12).
         let xa: Vec<f64> = lam.draws.iter().map(|d| d.x_m / d.a_m).collect();
         let (xm, xsd) = mean_std(&xa);
@@ -254,11 +323,21 @@ mod tests {
 
     #[test]
     fn composite_plus_epoxy_is_sqrt3_b_for_every_pair() {
-        let lam = Laminate::stochastic(&StochasticSpec { pairs: 2000, ..Default::default() }, Plane::Strain).unwrap();
+        let lam = Laminate::stochastic(
+            &StochasticSpec {
+                pairs: 2000,
+                ..Default::default()
+            },
+            Plane::Strain,
+        )
+        .unwrap();
         for d in &lam.draws {
             let total = d.composite_m + d.epoxy_drawn_m;
             assert!((total - 3f64.sqrt() * d.b_m).abs() < 1e-15, "{d:?}");
-            assert!(d.epoxy_drawn_m >= -1e-18, "f_E >= 0 since max f_C = sqrt(3) b at x = a/2");
+            assert!(
+                d.epoxy_drawn_m >= -1e-18,
+                "f_E >= 0 since max f_C = sqrt(3) b at x = a/2"
+            );
             assert!(d.epoxy_m >= 0.02e-3);
         }
         // DESIGN.md: with a 0.02 mm minimum about 61% of epoxy layers are clamped.
@@ -280,7 +359,12 @@ mod tests {
     #[test]
     fn negative_draws_are_rejected_not_kept() {
         // b mean 0 with a large std: about half of the draws are negative and must be redrawn.
-        let spec = StochasticSpec { pairs: 200, b_mean_m: 1e-6, b_std_m: 1e-4, ..Default::default() };
+        let spec = StochasticSpec {
+            pairs: 200,
+            b_mean_m: 1e-6,
+            b_std_m: 1e-4,
+            ..Default::default()
+        };
         let lam = Laminate::stochastic(&spec, Plane::Strain).unwrap();
         assert!(lam.draws.iter().all(|d| d.a_m > 0.0 && d.b_m > 0.0));
         assert!(lam.draws.iter().map(|d| d.rejected_draws).sum::<u32>() > 50);
@@ -288,9 +372,21 @@ mod tests {
 
     #[test]
     fn bad_specs_name_the_field() {
-        let e = Laminate::stochastic(&StochasticSpec { pairs: 0, ..Default::default() }, Plane::Strain);
+        let e = Laminate::stochastic(
+            &StochasticSpec {
+                pairs: 0,
+                ..Default::default()
+            },
+            Plane::Strain,
+        );
         assert!(e.unwrap_err().to_string().contains("laminate.pairs"));
-        let e = Laminate::stochastic(&StochasticSpec { b_std_m: f64::NAN, ..Default::default() }, Plane::Strain);
+        let e = Laminate::stochastic(
+            &StochasticSpec {
+                b_std_m: f64::NAN,
+                ..Default::default()
+            },
+            Plane::Strain,
+        );
         assert!(e.unwrap_err().to_string().contains("laminate.b_std_m"));
         let epoxy = Orthotropic::epoxy().reduce(Plane::Strain).unwrap();
         let e = Laminate::homogeneous(epoxy, -1e-3).unwrap_err().to_string();

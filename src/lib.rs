@@ -5,6 +5,7 @@
 //! Data flows one way: [`laminate`] -> [`mesh`] -> [`fem`] -> [`solve`] -> [`signal`] /
 //! [`trnews`] -> [`plot`] / [`io`]. [`scene`] describes a whole experiment setup.
 
+pub mod contact;
 pub mod error;
 pub mod fem;
 pub mod io;
@@ -14,6 +15,5 @@ pub mod mesh;
 pub mod plot;
 pub mod signal;
 pub mod solve;
-pub mod contact;
 
 pub use error::{Error, Result};

@@ -150,7 +150,11 @@ impl Orthotropic {
                 return Err(self.reject(format!("{field} = {value} must be finite and > 0")));
             }
         }
-        for (field, value) in [("nu12", self.nu12), ("nu13", self.nu13), ("nu23", self.nu23)] {
+        for (field, value) in [
+            ("nu12", self.nu12),
+            ("nu13", self.nu13),
+            ("nu23", self.nu23),
+        ] {
             if !value.is_finite() {
                 return Err(self.reject(format!("{field} = {value} must be finite")));
             }
@@ -159,7 +163,10 @@ impl Orthotropic {
     }
 
     fn reject(&self, reason: String) -> Error {
-        Error::Material { name: self.name.clone(), reason }
+        Error::Material {
+            name: self.name.clone(),
+            reason,
+        }
     }
 
     /// Symmetric 3x3 normal-strain compliance block of the 3D orthotropic material (1/Pa).
@@ -282,7 +289,11 @@ mod tests {
 
     #[test]
     fn presets_are_positive_definite_in_both_planes() {
-        for o in [Orthotropic::epoxy(), Orthotropic::fabric_0_90(), Orthotropic::fabric_45_45()] {
+        for o in [
+            Orthotropic::epoxy(),
+            Orthotropic::fabric_0_90(),
+            Orthotropic::fabric_45_45(),
+        ] {
             for plane in [Plane::Strain, Plane::Stress] {
                 let m = o.reduce(plane).unwrap();
                 assert!(m.is_positive_definite(), "{} {plane:?}", o.name);
@@ -293,7 +304,10 @@ mod tests {
     #[test]
     fn epoxy_wave_speeds() {
         // Vs = sqrt(G/rho) = 1049 m/s (DESIGN.md: about 1050 m/s), Vp = sqrt(c11/rho) = 2571 m/s.
-        let w = Orthotropic::epoxy().reduce(Plane::Strain).unwrap().wave_speeds();
+        let w = Orthotropic::epoxy()
+            .reduce(Plane::Strain)
+            .unwrap()
+            .wave_speeds();
         assert!((w.s_m_s - 1049.3).abs() < 0.5);
         assert!((w.p_x_m_s - 2571.0).abs() < 1.0);
         assert_eq!(w.p_x_m_s, w.p_y_m_s);
@@ -304,13 +318,23 @@ mod tests {
         let mut o = Orthotropic::isotropic("rubbery", 1e9, 0.2, 1000.0);
         o.nu12 = 1.5; // |nu12| > sqrt(E1/E2): in-plane compliance indefinite
         let err = o.reduce(Plane::Stress).unwrap_err().to_string();
-        assert!(err.contains("rubbery") && err.contains("positive definite"), "{err}");
+        assert!(
+            err.contains("rubbery") && err.contains("positive definite"),
+            "{err}"
+        );
         let mut bad = Orthotropic::epoxy();
         bad.density_kg_m3 = f64::NAN;
         let err = bad.reduce(Plane::Strain).unwrap_err().to_string();
-        assert!(err.contains("density_kg_m3") && err.contains("NaN"), "{err}");
+        assert!(
+            err.contains("density_kg_m3") && err.contains("NaN"),
+            "{err}"
+        );
         bad = Orthotropic::epoxy();
         bad.e2_pa = -1.0;
-        assert!(bad.reduce(Plane::Strain).unwrap_err().to_string().contains("e2_pa"));
+        assert!(bad
+            .reduce(Plane::Strain)
+            .unwrap_err()
+            .to_string()
+            .contains("e2_pa"));
     }
 }

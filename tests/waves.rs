@@ -10,7 +10,10 @@ const WIDTH: f64 = 0.15e-6;
 const H: f64 = 25e-6;
 
 fn cfg(duration: f64) -> RunConfig {
-    RunConfig { duration_s: duration, ..Default::default() }
+    RunConfig {
+        duration_s: duration,
+        ..Default::default()
+    }
 }
 
 /// Arrival picked as the time of the velocity peak (parabolic interpolation) at two depths;
@@ -19,7 +22,10 @@ fn measured_speed(shear: bool) -> f64 {
     let model = strip(&[(epoxy(), 8e-3)], H, 4, shear, BottomEdge::Absorbing);
     let (angle, comp) = if shear { (0.0, 0) } else { (270.0, 1) };
     let src = top_traction(&model, angle, gaussian(1e-9, 6e-6, 0.6e-6, WIDTH, 1e3));
-    let recv = [depth_receiver(&model, 1e-3, comp), depth_receiver(&model, 4e-3, comp)];
+    let recv = [
+        depth_receiver(&model, 1e-3, comp),
+        depth_receiver(&model, 4e-3, comp),
+    ];
     let out = run(&model, &[src], &recv, &cfg(6e-6)).unwrap();
     let (t1, _) = peak(&out.traces[0], 0.0, 6e-6);
     let (t2, _) = peak(&out.traces[1], 0.0, 6e-6);
@@ -31,8 +37,16 @@ fn p_and_s_arrivals_match_material_speeds_within_2_percent() {
     let w = epoxy().wave_speeds();
     let vp = measured_speed(false);
     let vs = measured_speed(true);
-    assert!((vp / w.p_y_m_s - 1.0).abs() < 0.02, "Vp measured {vp}, expected {}", w.p_y_m_s);
-    assert!((vs / w.s_m_s - 1.0).abs() < 0.02, "Vs measured {vs}, expected {}", w.s_m_s);
+    assert!(
+        (vp / w.p_y_m_s - 1.0).abs() < 0.02,
+        "Vp measured {vp}, expected {}",
+        w.p_y_m_s
+    );
+    assert!(
+        (vs / w.s_m_s - 1.0).abs() < 0.02,
+        "Vs measured {vs}, expected {}",
+        w.s_m_s
+    );
 }
 
 #[test]
@@ -43,9 +57,18 @@ fn interface_reflection_and_transmission_match_impedance_ratios() {
     // T_stress = 2 Z2/(Z1 + Z2). Tolerance 3% (issue), of the incident amplitude.
     let (e, f) = (epoxy(), fabric());
     let (z1, z2) = (e.impedance_p_y(), f.impedance_p_y());
-    let model = strip(&[(e, 4e-3), (f.clone(), 6e-3)], H, 4, false, BottomEdge::Absorbing);
+    let model = strip(
+        &[(e, 4e-3), (f.clone(), 6e-3)],
+        H,
+        4,
+        false,
+        BottomEdge::Absorbing,
+    );
     let src = top_traction(&model, 270.0, gaussian(1e-9, 5e-6, 0.6e-6, WIDTH, 1e3));
-    let recv = [depth_receiver(&model, 2e-3, 1), depth_receiver(&model, 5e-3, 1)];
+    let recv = [
+        depth_receiver(&model, 2e-3, 1),
+        depth_receiver(&model, 5e-3, 1),
+    ];
     let out = run(&model, &[src], &recv, &cfg(5e-6)).unwrap();
     let vp1 = epoxy().wave_speeds().p_y_m_s;
     let t_inc = 0.6e-6 + 2e-3 / vp1;
@@ -56,8 +79,16 @@ fn interface_reflection_and_transmission_match_impedance_ratios() {
     let (_, transmitted) = peak(&out.traces[1], t_tr - 0.5e-6, t_tr + 0.5e-6);
     let r_v = (z1 - z2) / (z1 + z2);
     let t_v = 2.0 * z1 / (z1 + z2);
-    assert!((reflected / incident - r_v).abs() < 0.03, "R measured {}, expected {r_v}", reflected / incident);
-    assert!((transmitted / incident - t_v).abs() < 0.03, "T measured {}, expected {t_v}", transmitted / incident);
+    assert!(
+        (reflected / incident - r_v).abs() < 0.03,
+        "R measured {}, expected {r_v}",
+        reflected / incident
+    );
+    assert!(
+        (transmitted / incident - t_v).abs() < 0.03,
+        "T measured {}, expected {t_v}",
+        transmitted / incident
+    );
 }
 
 /// Peak velocity of the wave reflected by the bottom edge over the incident peak, at mid-depth.

@@ -9,7 +9,8 @@ pub type ElementMatrix = SMatrix<f64, 6, 6>;
 /// B = 1/(2A) [[b1 0 b2 0 b3 0], [0 c1 0 c2 0 c3], [c1 b1 c2 b2 c3 b3]],
 /// b_i = y_j - y_k, c_i = x_k - x_j (i, j, k cyclic).
 pub fn strain_displacement(x: [[f64; 2]; 3]) -> (SMatrix<f64, 3, 6>, f64) {
-    let twice_area = (x[1][0] - x[0][0]) * (x[2][1] - x[0][1]) - (x[2][0] - x[0][0]) * (x[1][1] - x[0][1]);
+    let twice_area =
+        (x[1][0] - x[0][0]) * (x[2][1] - x[0][1]) - (x[2][0] - x[0][0]) * (x[1][1] - x[0][1]);
     let mut b = SMatrix::<f64, 3, 6>::zeros();
     for i in 0..3 {
         let (j, k) = ((i + 1) % 3, (i + 2) % 3);
@@ -44,7 +45,10 @@ pub fn lumped_mass(area: f64, density: f64) -> f64 {
 /// the largest absolute row sum of K_e divided by the nodal mass). By the element
 /// eigenvalue inequality it bounds omega_max^2 of the assembled lumped system.
 pub fn omega_squared_bound(k: &ElementMatrix, nodal_mass: f64) -> f64 {
-    (0..6).map(|i| k.row(i).iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max) / nodal_mass
+    (0..6)
+        .map(|i| k.row(i).iter().map(|v| v.abs()).sum::<f64>())
+        .fold(0.0, f64::max)
+        / nodal_mass
 }
 
 /// Strain (eps_xx, eps_yy, gamma_xy) of an element for nodal displacements `u`.
@@ -74,7 +78,12 @@ mod tests {
         ];
         for i in 0..6 {
             for j in 0..6 {
-                assert!((k[(i, j)] - hand[i][j]).abs() < 1e-15, "K[{i}][{j}] = {} vs {}", k[(i, j)], hand[i][j]);
+                assert!(
+                    (k[(i, j)] - hand[i][j]).abs() < 1e-15,
+                    "K[{i}][{j}] = {} vs {}",
+                    k[(i, j)],
+                    hand[i][j]
+                );
             }
         }
     }
@@ -86,13 +95,19 @@ mod tests {
         let f = |p: [f64; 2]| [2.0 * p[0] + 3.0 * p[1], -1.0 * p[0] + 0.5 * p[1]];
         let u = SVector::<f64, 6>::from_iterator(x.iter().flat_map(|&p| f(p)));
         let e = strain(x, &u);
-        assert!((e[0] - 2.0).abs() < 1e-14 && (e[1] - 0.5).abs() < 1e-14 && (e[2] - 2.0).abs() < 1e-14);
+        assert!(
+            (e[0] - 2.0).abs() < 1e-14 && (e[1] - 0.5).abs() < 1e-14 && (e[2] - 2.0).abs() < 1e-14
+        );
     }
 
     #[test]
     fn consistent_mass_total_is_rho_area_per_direction() {
         let m = consistent_mass(0.5, 1200.0);
-        let total_x: f64 = (0..6).step_by(2).flat_map(|i| (0..6).step_by(2).map(move |j| (i, j))).map(|(i, j)| m[(i, j)]).sum();
+        let total_x: f64 = (0..6)
+            .step_by(2)
+            .flat_map(|i| (0..6).step_by(2).map(move |j| (i, j)))
+            .map(|(i, j)| m[(i, j)])
+            .sum();
         assert!((total_x - 600.0).abs() < 1e-12);
         assert!((3.0 * lumped_mass(0.5, 1200.0) - 600.0).abs() < 1e-12);
     }

@@ -31,17 +31,35 @@ pub struct Model {
 
 impl Model {
     /// Validates the mesh and assembles K, the lumped M and the dashpots of `absorbing` sides.
-    pub fn build(mesh: Mesh, materials: Vec<Material>, absorbing: &[Side], mut fixed_dofs: Vec<usize>, crack: Option<Crack>) -> Result<Model> {
+    pub fn build(
+        mesh: Mesh,
+        materials: Vec<Material>,
+        absorbing: &[Side],
+        mut fixed_dofs: Vec<usize>,
+        crack: Option<Crack>,
+    ) -> Result<Model> {
         mesh.validate()?;
         if let Some(&d) = fixed_dofs.iter().find(|&&d| d >= mesh.dofs()) {
-            return Err(Error::invalid("fixed_dofs", d, format!("the mesh has {} DOFs", mesh.dofs())));
+            return Err(Error::invalid(
+                "fixed_dofs",
+                d,
+                format!("the mesh has {} DOFs", mesh.dofs()),
+            ));
         }
         fixed_dofs.sort_unstable();
         fixed_dofs.dedup();
         let stiffness = assemble_stiffness(&mesh, &materials)?;
         let lumped_mass = assemble_lumped_mass(&mesh, &materials)?;
         let dashpots = assemble_dashpots(&mesh, &materials, absorbing)?;
-        Ok(Model { mesh, materials, stiffness, lumped_mass, dashpots, fixed_dofs, crack })
+        Ok(Model {
+            mesh,
+            materials,
+            stiffness,
+            lumped_mass,
+            dashpots,
+            fixed_dofs,
+            crack,
+        })
     }
 
     /// Number of DOFs.
@@ -56,7 +74,12 @@ fn element_nodes(mesh: &Mesh, t: [usize; 3]) -> [[f64; 2]; 3] {
 
 fn material_of<'a>(mesh: &Mesh, materials: &'a [Material], e: usize) -> Result<&'a Material> {
     let id = mesh.element_material[e];
-    materials.get(id).ok_or_else(|| Error::Mesh(format!("element {e} has material id {id}, but only {} materials exist", materials.len())))
+    materials.get(id).ok_or_else(|| {
+        Error::Mesh(format!(
+            "element {e} has material id {id}, but only {} materials exist",
+            materials.len()
+        ))
+    })
 }
 
 /// Assembles the global stiffness K = sum_e A_e B_e^T C_e B_e (report Sec. 4.7).
@@ -64,7 +87,10 @@ pub fn assemble_stiffness(mesh: &Mesh, materials: &[Material]) -> Result<BlockCs
     let mut k = BlockCsr::pattern(mesh.nodes.len(), &mesh.triangles);
     for (e, &t) in mesh.triangles.iter().enumerate() {
         let m = material_of(mesh, materials, e)?;
-        k.add_element(t, &element::stiffness(element_nodes(mesh, t), &m.stiffness_pa));
+        k.add_element(
+            t,
+            &element::stiffness(element_nodes(mesh, t), &m.stiffness_pa),
+        );
     }
     Ok(k)
 }
@@ -74,7 +100,10 @@ pub fn assemble_consistent_mass(mesh: &Mesh, materials: &[Material]) -> Result<B
     let mut m = BlockCsr::pattern(mesh.nodes.len(), &mesh.triangles);
     for (e, &t) in mesh.triangles.iter().enumerate() {
         let mat = material_of(mesh, materials, e)?;
-        m.add_element(t, &element::consistent_mass(0.5 * mesh.twice_area(t), mat.density_kg_m3));
+        m.add_element(
+            t,
+            &element::consistent_mass(0.5 * mesh.twice_area(t), mat.density_kg_m3),
+        );
     }
     Ok(m)
 }
@@ -92,7 +121,10 @@ pub fn assemble_lumped_mass(mesh: &Mesh, materials: &[Material]) -> Result<Vec<f
         }
     }
     if let Some(d) = m.iter().position(|&v| !(v > 0.0)) {
-        return Err(Error::Mesh(format!("node {} belongs to no element (zero mass)", d / 2)));
+        return Err(Error::Mesh(format!(
+            "node {} belongs to no element (zero mass)",
+            d / 2
+        )));
     }
     Ok(m)
 }
@@ -101,7 +133,11 @@ pub fn assemble_lumped_mass(mesh: &Mesh, materials: &[Material]) -> Result<Vec<f
 /// of its two nodes gets rho Vp L / 2 normal to the side and rho Vs L / 2 along it, with rho,
 /// Vp, Vs of the element the edge belongs to (DESIGN.md item 6: the local impedance, not an
 /// average). Returns (DOF, coefficient) sorted by DOF, empty if `sides` is empty.
-pub fn assemble_dashpots(mesh: &Mesh, materials: &[Material], sides: &[Side]) -> Result<Vec<(usize, f64)>> {
+pub fn assemble_dashpots(
+    mesh: &Mesh,
+    materials: &[Material],
+    sides: &[Side],
+) -> Result<Vec<(usize, f64)>> {
     let mut c = std::collections::BTreeMap::<usize, f64>::new();
     for &side in sides {
         let normal_axis = match side {
@@ -111,12 +147,17 @@ pub fn assemble_dashpots(mesh: &Mesh, materials: &[Material], sides: &[Side]) ->
         for (e, a, b) in mesh.side_edges(side) {
             let mat = material_of(mesh, materials, e)?;
             let w = mat.wave_speeds();
-            let vp = if normal_axis == 0 { w.p_x_m_s } else { w.p_y_m_s };
+            let vp = if normal_axis == 0 {
+                w.p_x_m_s
+            } else {
+                w.p_y_m_s
+            };
             let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
             let half = 0.5 * (pb[0] - pa[0]).hypot(pb[1] - pa[1]);
             for n in [a, b] {
                 *c.entry(2 * n + normal_axis).or_default() += mat.density_kg_m3 * vp * half;
-                *c.entry(2 * n + 1 - normal_axis).or_default() += mat.density_kg_m3 * w.s_m_s * half;
+                *c.entry(2 * n + 1 - normal_axis).or_default() +=
+                    mat.density_kg_m3 * w.s_m_s * half;
             }
         }
     }

@@ -58,7 +58,11 @@ impl BlockCsr {
             row_ptr.push(cols.len());
         }
         let blocks = vec![[0.0; 4]; cols.len()];
-        BlockCsr { row_ptr, cols, blocks }
+        BlockCsr {
+            row_ptr,
+            cols,
+            blocks,
+        }
     }
 
     /// Number of node rows.
@@ -69,7 +73,11 @@ impl BlockCsr {
     /// Position of block (r, c) in the pattern.
     fn position(&self, r: usize, c: usize) -> usize {
         let range = self.row_ptr[r]..self.row_ptr[r + 1];
-        range.start + self.cols[range].iter().position(|&x| x as usize == c).expect("block outside the mesh pattern")
+        range.start
+            + self.cols[range]
+                .iter()
+                .position(|&x| x as usize == c)
+                .expect("block outside the mesh pattern")
     }
 
     /// Adds a 6x6 element matrix (DOF order x1 y1 x2 y2 x3 y3) for element nodes `t`.
@@ -102,14 +110,16 @@ impl BlockCsr {
 
     /// out = A u, parallel over node rows.
     pub fn mul(&self, u: &[f64], out: &mut [f64]) {
-        out.par_chunks_mut(2 * ROWS_PER_TASK).enumerate().for_each(|(chunk, o)| {
-            let r0 = chunk * ROWS_PER_TASK;
-            for (k, pair) in o.chunks_exact_mut(2).enumerate() {
-                let f = self.row_product(r0 + k, u);
-                pair[0] = f[0];
-                pair[1] = f[1];
-            }
-        });
+        out.par_chunks_mut(2 * ROWS_PER_TASK)
+            .enumerate()
+            .for_each(|(chunk, o)| {
+                let r0 = chunk * ROWS_PER_TASK;
+                for (k, pair) in o.chunks_exact_mut(2).enumerate() {
+                    let f = self.row_product(r0 + k, u);
+                    pair[0] = f[0];
+                    pair[1] = f[1];
+                }
+            });
     }
 
     /// Dense copy (tests and small problems only).
@@ -144,7 +154,11 @@ impl BlockCsr {
                 let q = self.position(c, r);
                 let (a, b) = (self.blocks[p], self.blocks[q]);
                 // block(r,c)^T must equal block(c,r)
-                max_diff = max_diff.max((a[0] - b[0]).abs()).max((a[1] - b[2]).abs()).max((a[2] - b[1]).abs()).max((a[3] - b[3]).abs());
+                max_diff = max_diff
+                    .max((a[0] - b[0]).abs())
+                    .max((a[1] - b[2]).abs())
+                    .max((a[2] - b[1]).abs())
+                    .max((a[3] - b[3]).abs());
                 max_entry = max_entry.max(a.iter().fold(0.0, |m, v| m.max(v.abs())));
             }
         }

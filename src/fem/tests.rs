@@ -3,7 +3,14 @@ use crate::laminate::{Laminate, StochasticSpec};
 use crate::material::{Orthotropic, Plane};
 
 fn small_cfrp() -> (Mesh, Vec<Material>) {
-    let lam = Laminate::stochastic(&StochasticSpec { pairs: 3, ..Default::default() }, Plane::Strain).unwrap();
+    let lam = Laminate::stochastic(
+        &StochasticSpec {
+            pairs: 3,
+            ..Default::default()
+        },
+        Plane::Strain,
+    )
+    .unwrap();
     let mesh = Mesh::layered(&lam, 1e-3, 0.2e-3, 0.1e-3, &[], &[]).unwrap();
     (mesh, lam.materials)
 }
@@ -11,11 +18,16 @@ fn small_cfrp() -> (Mesh, Vec<Material>) {
 fn epoxy_block(width: f64, height: f64, h: f64) -> (Mesh, Vec<Material>) {
     let epoxy = Orthotropic::epoxy().reduce(Plane::Strain).unwrap();
     let lam = Laminate::homogeneous(epoxy, height).unwrap();
-    (Mesh::layered(&lam, width, h, h, &[], &[]).unwrap(), lam.materials)
+    (
+        Mesh::layered(&lam, width, h, h, &[], &[]).unwrap(),
+        lam.materials,
+    )
 }
 
 fn dense_mul(d: &[Vec<f64>], u: &[f64]) -> Vec<f64> {
-    d.iter().map(|row| row.iter().zip(u).map(|(a, b)| a * b).sum()).collect()
+    d.iter()
+        .map(|row| row.iter().zip(u).map(|(a, b)| a * b).sum())
+        .collect()
 }
 
 #[test]
@@ -32,9 +44,16 @@ fn rigid_body_modes_have_zero_force() {
     // relative to |K| |r| (1e-12: each row sums ~7 blocks of O(|K|) entries).
     let (mesh, mats) = small_cfrp();
     let k = assemble_stiffness(&mesh, &mats).unwrap();
-    let kmax = k.blocks.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    let modes: [Box<dyn Fn([f64; 2]) -> [f64; 2]>; 3] =
-        [Box::new(|_| [1.0, 0.0]), Box::new(|_| [0.0, 1.0]), Box::new(|p| [-p[1] * 1e3, p[0] * 1e3])];
+    let kmax = k
+        .blocks
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let modes: [Box<dyn Fn([f64; 2]) -> [f64; 2]>; 3] = [
+        Box::new(|_| [1.0, 0.0]),
+        Box::new(|_| [0.0, 1.0]),
+        Box::new(|p| [-p[1] * 1e3, p[0] * 1e3]),
+    ];
     for (m, mode) in modes.iter().enumerate() {
         let r: Vec<f64> = mesh.nodes.iter().flat_map(|&p| mode(p)).collect();
         let rmax = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -58,7 +77,9 @@ fn total_lumped_and_consistent_mass_equal_rho_area() {
     let total_x: f64 = lumped.iter().step_by(2).sum();
     assert!((total_x - expected).abs() < 1e-12 * expected);
     let consistent = assemble_consistent_mass(&mesh, &mats).unwrap();
-    let ones_x: Vec<f64> = (0..mesh.dofs()).map(|d| if d % 2 == 0 { 1.0 } else { 0.0 }).collect();
+    let ones_x: Vec<f64> = (0..mesh.dofs())
+        .map(|d| if d % 2 == 0 { 1.0 } else { 0.0 })
+        .collect();
     let mut mx = vec![0.0; mesh.dofs()];
     consistent.mul(&ones_x, &mut mx);
     assert!((mx.iter().sum::<f64>() - expected).abs() < 1e-12 * expected);
@@ -72,19 +93,42 @@ fn patch_test_linear_field_gives_zero_interior_residual() {
     // material here. Tolerance: round-off relative to |K| |u|.
     let (mesh, mats) = epoxy_block(1e-3, 0.6e-3, 0.1e-3);
     let k = assemble_stiffness(&mesh, &mats).unwrap();
-    let u: Vec<f64> = mesh.nodes.iter().flat_map(|p| [1e-3 * p[0] + 2e-3 * p[1], -0.5e-3 * p[0] + 0.7e-3 * p[1]]).collect();
+    let u: Vec<f64> = mesh
+        .nodes
+        .iter()
+        .flat_map(|p| [1e-3 * p[0] + 2e-3 * p[1], -0.5e-3 * p[0] + 0.7e-3 * p[1]])
+        .collect();
     let mut f = vec![0.0; u.len()];
     k.mul(&u, &mut f);
-    let scale = k.blocks.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs())) * 1e-6;
+    let scale = k
+        .blocks
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, v| m.max(v.abs()))
+        * 1e-6;
     let boundary: std::collections::HashSet<usize> =
-        [Side::Bottom, Side::Top, Side::Left, Side::Right].iter().flat_map(|&s| mesh.side_nodes(s)).collect();
+        [Side::Bottom, Side::Top, Side::Left, Side::Right]
+            .iter()
+            .flat_map(|&s| mesh.side_nodes(s))
+            .collect();
     for n in (0..mesh.nodes.len()).filter(|n| !boundary.contains(n)) {
-        assert!(f[2 * n].abs() < 1e-12 * scale && f[2 * n + 1].abs() < 1e-12 * scale, "node {n}: {:e} {:e}", f[2 * n], f[2 * n + 1]);
+        assert!(
+            f[2 * n].abs() < 1e-12 * scale && f[2 * n + 1].abs() < 1e-12 * scale,
+            "node {n}: {:e} {:e}",
+            f[2 * n],
+            f[2 * n + 1]
+        );
     }
     for (t, _) in mesh.triangles.iter().zip(0..) {
-        let ue = nalgebra::SVector::<f64, 6>::from_iterator(t.iter().flat_map(|&n| [u[2 * n], u[2 * n + 1]]));
+        let ue = nalgebra::SVector::<f64, 6>::from_iterator(
+            t.iter().flat_map(|&n| [u[2 * n], u[2 * n + 1]]),
+        );
         let e = element::strain(t.map(|n| mesh.nodes[n]), &ue);
-        assert!((e[0] - 1e-3).abs() < 1e-15 && (e[1] - 0.7e-3).abs() < 1e-15 && (e[2] - 1.5e-3).abs() < 1e-15);
+        assert!(
+            (e[0] - 1e-3).abs() < 1e-15
+                && (e[1] - 0.7e-3).abs() < 1e-15
+                && (e[2] - 1.5e-3).abs() < 1e-15
+        );
     }
 }
 
@@ -112,8 +156,14 @@ fn sparse_assembly_matches_dense_reference() {
     let mmax = dense_m.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
     for i in 0..n {
         for j in 0..n {
-            assert!((k[i][j] - dense_k[i][j]).abs() <= 1e-14 * kmax, "K[{i}][{j}]");
-            assert!((m[i][j] - dense_m[i][j]).abs() <= 1e-14 * mmax, "M[{i}][{j}]");
+            assert!(
+                (k[i][j] - dense_k[i][j]).abs() <= 1e-14 * kmax,
+                "K[{i}][{j}]"
+            );
+            assert!(
+                (m[i][j] - dense_m[i][j]).abs() <= 1e-14 * mmax,
+                "M[{i}][{j}]"
+            );
         }
     }
     // and the parallel product equals the dense product
@@ -137,7 +187,11 @@ fn dashpots_on_homogeneous_edge_sum_to_impedance_times_length() {
     assert!((normal - rho * w.p_y_m_s * width).abs() < 1e-12 * normal);
     assert!((tangential - rho * w.s_m_s * width).abs() < 1e-12 * tangential);
     let left = assemble_dashpots(&mesh, &mats, &[Side::Left]).unwrap();
-    let normal_left: f64 = left.iter().filter(|(d, _)| d % 2 == 0).map(|(_, v)| v).sum();
+    let normal_left: f64 = left
+        .iter()
+        .filter(|(d, _)| d % 2 == 0)
+        .map(|(_, v)| v)
+        .sum();
     assert!((normal_left - rho * w.p_x_m_s * height).abs() < 1e-12 * normal_left);
     assert!(assemble_dashpots(&mesh, &mats, &[]).unwrap().is_empty());
 }

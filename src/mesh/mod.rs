@@ -27,7 +27,11 @@ impl Side {
             "top" => Ok(Side::Top),
             "left" => Ok(Side::Left),
             "right" => Ok(Side::Right),
-            other => Err(Error::invalid("side", other, "expected bottom, top, left or right")),
+            other => Err(Error::invalid(
+                "side",
+                other,
+                "expected bottom, top, left or right",
+            )),
         }
     }
 
@@ -94,7 +98,11 @@ fn subdivide(breaks: &[f64], h: f64) -> Vec<f64> {
     for w in breaks.windows(2) {
         let n = ((w[1] - w[0]) / h).ceil().max(1.0) as usize;
         for k in 1..=n {
-            out.push(if k == n { w[1] } else { w[0] + (w[1] - w[0]) * k as f64 / n as f64 });
+            out.push(if k == n {
+                w[1]
+            } else {
+                w[0] + (w[1] - w[0]) * k as f64 / n as f64
+            });
         }
     }
     out
@@ -102,15 +110,29 @@ fn subdivide(breaks: &[f64], h: f64) -> Vec<f64> {
 
 /// Sorted breakpoints of [lo, hi]: `fixed` kept as they are, each extra break snapped to
 /// the nearest existing one when closer than `snap`, to avoid sliver elements.
-fn merge_breaks(lo: f64, hi: f64, fixed: &[f64], extra: &[f64], snap: f64, field: &str) -> Result<Vec<f64>> {
+fn merge_breaks(
+    lo: f64,
+    hi: f64,
+    fixed: &[f64],
+    extra: &[f64],
+    snap: f64,
+    field: &str,
+) -> Result<Vec<f64>> {
     let mut b: Vec<f64> = fixed.to_vec();
     b.push(lo);
     b.push(hi);
     for &e in extra {
         if !(e.is_finite() && e > lo && e < hi) {
-            return Err(Error::invalid(field, e, format!("must lie strictly inside ({lo}, {hi})")));
+            return Err(Error::invalid(
+                field,
+                e,
+                format!("must lie strictly inside ({lo}, {hi})"),
+            ));
         }
-        let nearest = b.iter().map(|v| (v - e).abs()).fold(f64::INFINITY, f64::min);
+        let nearest = b
+            .iter()
+            .map(|v| (v - e).abs())
+            .fold(f64::INFINITY, f64::min);
         if nearest >= snap {
             b.push(e);
         }
@@ -128,7 +150,14 @@ impl Mesh {
     /// `y_breaks` add lines the mesh must conform to (for example crack tips and the crack
     /// line); a break closer than a quarter element to an existing line snaps to it. Each
     /// rectangular cell is split along its rising diagonal into two counter-clockwise T3.
-    pub fn layered(laminate: &Laminate, width_m: f64, hx: f64, hy: f64, x_breaks: &[f64], y_breaks: &[f64]) -> Result<Mesh> {
+    pub fn layered(
+        laminate: &Laminate,
+        width_m: f64,
+        hx: f64,
+        hy: f64,
+        x_breaks: &[f64],
+        y_breaks: &[f64],
+    ) -> Result<Mesh> {
         require_positive("width_m", width_m)?;
         require_positive("element_size_x_m", hx)?;
         require_positive("element_size_y_m", hy)?;
@@ -136,10 +165,17 @@ impl Mesh {
         let height = *interfaces.last().unwrap();
         let xb = merge_breaks(0.0, width_m, &[], x_breaks, 0.25 * hx, "x_breaks")?;
         let yb = merge_breaks(0.0, height, &interfaces, y_breaks, 0.25 * hy, "y_breaks")?;
-        let grid = Grid { x_m: subdivide(&xb, hx), y_m: subdivide(&yb, hy) };
+        let grid = Grid {
+            x_m: subdivide(&xb, hx),
+            y_m: subdivide(&yb, hy),
+        };
         let cells = (grid.x_m.len() - 1) * (grid.y_m.len() - 1);
         if cells > 50_000_000 {
-            return Err(Error::invalid("element_size", format!("{hx} x {hy}"), format!("gives {cells} cells, more than 5e7")));
+            return Err(Error::invalid(
+                "element_size",
+                format!("{hx} x {hy}"),
+                format!("gives {cells} cells, more than 5e7"),
+            ));
         }
         let layer_material: Vec<usize> = laminate.layers.iter().map(|l| l.material).collect();
         Ok(Self::from_grid(grid, &interfaces, &layer_material))
@@ -157,7 +193,9 @@ impl Mesh {
         let mut element_material = Vec::with_capacity(triangles.capacity());
         for j in 0..nyn - 1 {
             let y_mid = 0.5 * (grid.y_m[j] + grid.y_m[j + 1]);
-            let layer = interfaces.partition_point(|&y| y <= y_mid).saturating_sub(1);
+            let layer = interfaces
+                .partition_point(|&y| y <= y_mid)
+                .saturating_sub(1);
             let material = layer_material[layer.min(layer_material.len() - 1)];
             for i in 0..nxn - 1 {
                 let n00 = j * nxn + i;
@@ -168,7 +206,13 @@ impl Mesh {
                 element_material.push(material);
             }
         }
-        Mesh { nodes, triangles, element_material, interfaces_y_m: interfaces.to_vec(), grid: Some(grid) }
+        Mesh {
+            nodes,
+            triangles,
+            element_material,
+            interfaces_y_m: interfaces.to_vec(),
+            grid: Some(grid),
+        }
     }
 
     /// Number of degrees of freedom (2 per node).
@@ -179,7 +223,12 @@ impl Mesh {
     /// Bounding box (x_min, x_max, y_min, y_max).
     pub fn bounds(&self) -> (f64, f64, f64, f64) {
         self.nodes.iter().fold(
-            (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY),
+            (
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            ),
             |(a, b, c, d), p| (a.min(p[0]), b.max(p[0]), c.min(p[1]), d.max(p[1])),
         )
     }
@@ -198,18 +247,35 @@ impl Mesh {
 
     /// Rejects non-finite coordinates and zero-area or inverted (clockwise) elements.
     pub fn validate(&self) -> Result<()> {
-        if let Some((i, p)) = self.nodes.iter().enumerate().find(|(_, p)| !(p[0].is_finite() && p[1].is_finite())) {
-            return Err(Error::Mesh(format!("node {i} has a non-finite coordinate {p:?}")));
+        if let Some((i, p)) = self
+            .nodes
+            .iter()
+            .enumerate()
+            .find(|(_, p)| !(p[0].is_finite() && p[1].is_finite()))
+        {
+            return Err(Error::Mesh(format!(
+                "node {i} has a non-finite coordinate {p:?}"
+            )));
         }
         let scale = self.tolerance().powi(2);
         for (e, &t) in self.triangles.iter().enumerate() {
             if let Some(&n) = t.iter().find(|&&n| n >= self.nodes.len()) {
-                return Err(Error::Mesh(format!("element {e} refers to node {n}, but there are {} nodes", self.nodes.len())));
+                return Err(Error::Mesh(format!(
+                    "element {e} refers to node {n}, but there are {} nodes",
+                    self.nodes.len()
+                )));
             }
             let a2 = self.twice_area(t);
             if a2 <= scale {
-                let kind = if a2.abs() <= scale { "zero-area" } else { "inverted (clockwise)" };
-                return Err(Error::Mesh(format!("element {e} with nodes {t:?} is {kind}: signed area {:.3e} m^2", 0.5 * a2)));
+                let kind = if a2.abs() <= scale {
+                    "zero-area"
+                } else {
+                    "inverted (clockwise)"
+                };
+                return Err(Error::Mesh(format!(
+                    "element {e} with nodes {t:?} is {kind}: signed area {:.3e} m^2",
+                    0.5 * a2
+                )));
             }
         }
         Ok(())
@@ -225,7 +291,9 @@ impl Mesh {
             Side::Left => (0, x0),
             Side::Right => (0, x1),
         };
-        let mut v: Vec<usize> = (0..self.nodes.len()).filter(|&n| (self.nodes[n][axis] - value).abs() <= tol).collect();
+        let mut v: Vec<usize> = (0..self.nodes.len())
+            .filter(|&n| (self.nodes[n][axis] - value).abs() <= tol)
+            .collect();
         v.sort_by(|&a, &b| self.nodes[a][1 - axis].total_cmp(&self.nodes[b][1 - axis]));
         v
     }
@@ -248,7 +316,9 @@ impl Mesh {
     /// The node nearest to a point.
     pub fn nearest_node(&self, p: [f64; 2]) -> usize {
         let d2 = |n: &[f64; 2]| (n[0] - p[0]).powi(2) + (n[1] - p[1]).powi(2);
-        (0..self.nodes.len()).min_by(|&a, &b| d2(&self.nodes[a]).total_cmp(&d2(&self.nodes[b]))).unwrap_or(0)
+        (0..self.nodes.len())
+            .min_by(|&a, &b| d2(&self.nodes[a]).total_cmp(&d2(&self.nodes[b])))
+            .unwrap_or(0)
     }
 
     /// Nodes lying on the segment p..q (within the mesh tolerance), sorted from p to q.
@@ -256,14 +326,16 @@ impl Mesh {
         let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
         let len2 = dx * dx + dy * dy;
         let tol = self.tolerance();
-        let param = |n: &[f64; 2]| ((n[0] - p[0]) * dx + (n[1] - p[1]) * dy) / len2.max(f64::MIN_POSITIVE);
+        let param =
+            |n: &[f64; 2]| ((n[0] - p[0]) * dx + (n[1] - p[1]) * dy) / len2.max(f64::MIN_POSITIVE);
         let mut v: Vec<(f64, usize)> = self
             .nodes
             .iter()
             .enumerate()
             .filter_map(|(i, n)| {
                 let s = param(n);
-                let dist = ((n[0] - p[0]) * dy - (n[1] - p[1]) * dx).abs() / len2.sqrt().max(f64::MIN_POSITIVE);
+                let dist = ((n[0] - p[0]) * dy - (n[1] - p[1]) * dx).abs()
+                    / len2.sqrt().max(f64::MIN_POSITIVE);
                 (dist <= tol && (-1e-12..=1.0 + 1e-12).contains(&s)).then_some((s, i))
             })
             .collect();
@@ -274,13 +346,19 @@ impl Mesh {
     /// The grid row line nearest to `y` (structured meshes), for snapping a crack onto the mesh.
     pub fn nearest_row_y(&self, y: f64) -> Option<f64> {
         let g = self.grid.as_ref()?;
-        g.y_m.iter().copied().min_by(|a, b| (a - y).abs().total_cmp(&(b - y).abs()))
+        g.y_m
+            .iter()
+            .copied()
+            .min_by(|a, b| (a - y).abs().total_cmp(&(b - y).abs()))
     }
 
     /// The grid column line nearest to `x` (structured meshes).
     pub fn nearest_column_x(&self, x: f64) -> Option<f64> {
         let g = self.grid.as_ref()?;
-        g.x_m.iter().copied().min_by(|a, b| (a - x).abs().total_cmp(&(b - x).abs()))
+        g.x_m
+            .iter()
+            .copied()
+            .min_by(|a, b| (a - x).abs().total_cmp(&(b - x).abs()))
     }
 
     /// Inserts a horizontal crack from (x0, y) to (x1, y) along mesh lines (report Sec. 4.9).
@@ -292,7 +370,11 @@ impl Mesh {
         let (bx0, bx1, by0, by1) = self.bounds();
         let tol = self.tolerance();
         if !(x0_m.is_finite() && x1_m.is_finite() && y_m.is_finite()) || x0_m >= x1_m {
-            return Err(Error::invalid("crack", format!("x {x0_m}..{x1_m}, y {y_m}"), "needs finite x0 < x1 and a finite y"));
+            return Err(Error::invalid(
+                "crack",
+                format!("x {x0_m}..{x1_m}, y {y_m}"),
+                "needs finite x0 < x1 and a finite y",
+            ));
         }
         if x0_m <= bx0 + tol || x1_m >= bx1 - tol || y_m <= by0 + tol || y_m >= by1 - tol {
             return Err(Error::invalid(
@@ -321,7 +403,8 @@ impl Mesh {
             pairs.push(CrackPair { master, slave });
         }
         for t in &mut self.triangles {
-            let centroid_y = (self.nodes[t[0]][1] + self.nodes[t[1]][1] + self.nodes[t[2]][1]) / 3.0;
+            let centroid_y =
+                (self.nodes[t[0]][1] + self.nodes[t[1]][1] + self.nodes[t[2]][1]) / 3.0;
             if centroid_y < y_m {
                 for n in t.iter_mut() {
                     if let Some(&s) = slave_of.get(n) {
@@ -330,7 +413,12 @@ impl Mesh {
                 }
             }
         }
-        Ok(Crack { y_m, x0_m, x1_m, pairs })
+        Ok(Crack {
+            y_m,
+            x0_m,
+            x1_m,
+            pairs,
+        })
     }
 
     /// Checks that consecutive nodes of a line are joined by element edges.
@@ -345,7 +433,10 @@ impl Mesh {
         for w in line.windows(2) {
             if !edges.contains(&(w[0].min(w[1]), w[0].max(w[1]))) {
                 let p = self.nodes[w[0]];
-                return Err(Error::Mesh(format!("crack segment leaves the mesh lines near ({:.6e}, {:.6e}) m", p[0], p[1])));
+                return Err(Error::Mesh(format!(
+                    "crack segment leaves the mesh lines near ({:.6e}, {:.6e}) m",
+                    p[0], p[1]
+                )));
             }
         }
         Ok(())
@@ -359,7 +450,14 @@ mod tests {
     use crate::material::Plane;
 
     fn cfrp_mesh() -> (Laminate, Mesh) {
-        let lam = Laminate::stochastic(&StochasticSpec { pairs: 10, ..Default::default() }, Plane::Strain).unwrap();
+        let lam = Laminate::stochastic(
+            &StochasticSpec {
+                pairs: 10,
+                ..Default::default()
+            },
+            Plane::Strain,
+        )
+        .unwrap();
         let mesh = Mesh::layered(&lam, 4e-3, 100e-6, 50e-6, &[], &[]).unwrap();
         (lam, mesh)
     }
@@ -369,7 +467,10 @@ mod tests {
         let (lam, mesh) = cfrp_mesh();
         let rows = &mesh.grid.as_ref().unwrap().y_m;
         for y in lam.interfaces_m() {
-            assert!(rows.iter().any(|r| (r - y).abs() < 1e-15), "interface {y} not a row line");
+            assert!(
+                rows.iter().any(|r| (r - y).abs() < 1e-15),
+                "interface {y} not a row line"
+            );
         }
         // every element lies inside one layer: its material is that layer's
         for (e, t) in mesh.triangles.iter().enumerate() {
@@ -377,7 +478,9 @@ mod tests {
             let layer = lam.interfaces_m().partition_point(|&y| y <= yc) - 1;
             assert_eq!(mesh.element_material[e], lam.layers[layer].material);
         }
-        assert!(rows.windows(2).all(|w| w[1] - w[0] <= 50e-6 * (1.0 + 1e-12)));
+        assert!(rows
+            .windows(2)
+            .all(|w| w[1] - w[0] <= 50e-6 * (1.0 + 1e-12)));
         mesh.validate().unwrap();
     }
 
@@ -385,7 +488,10 @@ mod tests {
     fn crack_faces_share_no_interior_node() {
         let (_, mut mesh) = cfrp_mesh();
         let y = mesh.nearest_row_y(0.6e-3).unwrap();
-        let (x0, x1) = (mesh.nearest_column_x(1e-3).unwrap(), mesh.nearest_column_x(2e-3).unwrap());
+        let (x0, x1) = (
+            mesh.nearest_column_x(1e-3).unwrap(),
+            mesh.nearest_column_x(2e-3).unwrap(),
+        );
         let n_before = mesh.nodes.len();
         let crack = mesh.insert_crack(y, x0, x1).unwrap();
         assert_eq!(crack.pairs.len(), 9); // 1 mm at 0.1 mm columns: 11 nodes, 9 inside
@@ -396,21 +502,33 @@ mod tests {
             let yc = t.iter().map(|&n| mesh.nodes[n][1]).sum::<f64>() / 3.0;
             for n in t {
                 if yc < y {
-                    assert!(!masters.contains(n), "element below uses an upper-face node");
+                    assert!(
+                        !masters.contains(n),
+                        "element below uses an upper-face node"
+                    );
                 } else {
                     assert!(!slaves.contains(n), "element above uses a lower-face node");
                 }
             }
         }
-        assert!(crack.pairs.windows(2).all(|w| mesh.nodes[w[0].master][0] < mesh.nodes[w[1].master][0]));
+        assert!(crack
+            .pairs
+            .windows(2)
+            .all(|w| mesh.nodes[w[0].master][0] < mesh.nodes[w[1].master][0]));
         mesh.validate().unwrap();
     }
 
     #[test]
     fn crack_off_mesh_or_outside_is_an_error_saying_where() {
         let (_, mut mesh) = cfrp_mesh();
-        let e = mesh.insert_crack(0.5e-3, 1e-3, 9e-3).unwrap_err().to_string();
-        assert!(e.contains("strictly inside the domain") && e.contains("9"), "{e}");
+        let e = mesh
+            .insert_crack(0.5e-3, 1e-3, 9e-3)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("strictly inside the domain") && e.contains("9"),
+            "{e}"
+        );
         let y = mesh.nearest_row_y(0.6e-3).unwrap();
         let e = mesh.insert_crack(y, 1.03e-3, 2e-3).unwrap_err().to_string();
         assert!(e.contains("not on mesh lines"), "{e}");
@@ -420,7 +538,11 @@ mod tests {
     fn inverted_element_is_rejected() {
         let (_, mut mesh) = cfrp_mesh();
         mesh.triangles[5].swap(1, 2);
-        assert!(mesh.validate().unwrap_err().to_string().contains("element 5"));
+        assert!(mesh
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("element 5"));
         let (_, mut mesh) = cfrp_mesh();
         mesh.nodes[3] = [f64::NAN, 0.0];
         assert!(mesh.validate().unwrap_err().to_string().contains("node 3"));

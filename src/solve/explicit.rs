@@ -8,7 +8,10 @@
 //! pairs. Fixed DOFs have dt^2/m = 0 and so never move. Nothing is allocated per step.
 
 use super::ledger::{EnergyLedger, Flows};
-use super::{sample_sources, stability, CrackTraces, Quantity, Receiver, RunConfig, RunOutput, RunReport, Snapshot, Source};
+use super::{
+    sample_sources, stability, CrackTraces, Quantity, Receiver, RunConfig, RunOutput, RunReport,
+    Snapshot, Source,
+};
 use crate::contact::ContactSolver;
 use crate::error::{Error, Result};
 use crate::fem::{BlockCsr, Model};
@@ -24,16 +27,19 @@ const BLOW_UP_FACTOR: f64 = 100.0;
 /// u_next = 2 u - u_prev - a .* (K u), in parallel over node rows (bit-identical for any
 /// thread count: every entry is computed by one task in a fixed order).
 fn fused_update(k: &BlockCsr, a: &[f64], u_prev: &[f64], u: &[f64], u_next: &mut [f64]) {
-    u_next.par_chunks_mut(2 * ROWS_PER_TASK).enumerate().for_each(|(chunk, out)| {
-        let r0 = chunk * ROWS_PER_TASK;
-        for (i, pair) in out.chunks_exact_mut(2).enumerate() {
-            let r = r0 + i;
-            let f = k.row_product(r, u);
-            let d = 2 * r;
-            pair[0] = 2.0 * u[d] - u_prev[d] - a[d] * f[0];
-            pair[1] = 2.0 * u[d + 1] - u_prev[d + 1] - a[d + 1] * f[1];
-        }
-    });
+    u_next
+        .par_chunks_mut(2 * ROWS_PER_TASK)
+        .enumerate()
+        .for_each(|(chunk, out)| {
+            let r0 = chunk * ROWS_PER_TASK;
+            for (i, pair) in out.chunks_exact_mut(2).enumerate() {
+                let r = r0 + i;
+                let f = k.row_product(r, u);
+                let d = 2 * r;
+                pair[0] = 2.0 * u[d] - u_prev[d] - a[d] * f[0];
+                pair[1] = 2.0 * u[d + 1] - u_prev[d + 1] - a[d + 1] * f[1];
+            }
+        });
 }
 
 /// Per-DOF constants of the scheme.
@@ -52,17 +58,31 @@ impl Coefficients {
         for &d in &model.fixed_dofs {
             a[d] = 0.0;
         }
-        let dashpots: Vec<(usize, f64, f64)> = model.dashpots.iter().map(|&(d, c)| (d, c, c * dt / (2.0 * model.lumped_mass[d]))).collect();
+        let dashpots: Vec<(usize, f64, f64)> = model
+            .dashpots
+            .iter()
+            .map(|&(d, c)| (d, c, c * dt / (2.0 * model.lumped_mass[d])))
+            .collect();
         let mut compliance = a.clone();
         for &(d, _, r) in &dashpots {
             compliance[d] /= 1.0 + r;
         }
-        Coefficients { a, dashpots, compliance }
+        Coefficients {
+            a,
+            dashpots,
+            compliance,
+        }
     }
 }
 
 /// Energy at t_{n-1/2}: kinetic 1/2 v^T M v with v = (u_n - u_{n-1})/dt, strain 1/2 u_{n-1}^T K u_n.
-fn staggered_energy(model: &Model, dt: f64, u_prev: &[f64], u: &[f64], ku: &mut [f64]) -> (f64, f64) {
+fn staggered_energy(
+    model: &Model,
+    dt: f64,
+    u_prev: &[f64],
+    u: &[f64],
+    ku: &mut [f64],
+) -> (f64, f64) {
     model.stiffness.mul(u, ku);
     let mut kinetic = 0.0;
     let mut strain = 0.0;
@@ -77,41 +97,88 @@ fn staggered_energy(model: &Model, dt: f64, u_prev: &[f64], u: &[f64], ku: &mut 
 fn trace_value(r: &Receiver, dt: f64, u_prev: &[f64], u: &[f64], u_next: &[f64]) -> f64 {
     match r.quantity {
         Quantity::Displacement => r.weights.iter().map(|&(d, w)| w * u[d]).sum(),
-        Quantity::Velocity => r.weights.iter().map(|&(d, w)| w * (u_next[d] - u_prev[d])).sum::<f64>() / (2.0 * dt),
+        Quantity::Velocity => {
+            r.weights
+                .iter()
+                .map(|&(d, w)| w * (u_next[d] - u_prev[d]))
+                .sum::<f64>()
+                / (2.0 * dt)
+        }
     }
 }
 
 /// Runs the explicit scheme.
-pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], config: &RunConfig) -> Result<RunOutput> {
+pub(super) fn run(
+    model: &Model,
+    sources: &[Source],
+    receivers: &[Receiver],
+    config: &RunConfig,
+) -> Result<RunOutput> {
     let setup = Instant::now();
-    let stab = config.stability.unwrap_or_else(|| stability::estimate(model));
+    let stab = config
+        .stability
+        .unwrap_or_else(|| stability::estimate(model));
     let dt = config.dt_s.unwrap_or(config.step_safety * stab.dt_crit_s);
     let ratio = dt / stab.dt_crit_s;
     if ratio > 1.0 && !config.force {
-        return Err(Error::StepTooLarge { dt_s: dt, dt_crit_s: stab.dt_crit_s, ratio });
+        return Err(Error::StepTooLarge {
+            dt_s: dt,
+            dt_crit_s: stab.dt_crit_s,
+            ratio,
+        });
     }
     let steps = (config.duration_s / dt).round().max(1.0) as usize;
     let n = model.dofs();
     let coef = Coefficients::new(model, dt);
     let forces = sample_sources(sources, dt, steps)?;
-    let mut u = config.initial_displacement.clone().unwrap_or_else(|| vec![0.0; n]);
+    let mut u = config
+        .initial_displacement
+        .clone()
+        .unwrap_or_else(|| vec![0.0; n]);
     for &d in &model.fixed_dofs {
         u[d] = 0.0;
     }
+    // u_{-1} = u_0 - dt v_0: the staggered velocity v_{-1/2} equals the initial velocity.
     let mut u_prev = u.clone();
+    if let Some(v0) = &config.initial_velocity {
+        for (d, p) in u_prev.iter_mut().enumerate() {
+            if coef.a[d] != 0.0 {
+                *p -= dt * v0[d];
+            }
+        }
+    }
     let mut u_next = vec![0.0; n];
     let mut ku = vec![0.0; n];
     let mut contact = match (&model.crack, &config.contact) {
-        (Some(crack), Some(options)) => Some(ContactSolver::new(crack, &coef.compliance, *options, steps)?),
+        (Some(crack), Some(options)) => Some(ContactSolver::new(
+            crack,
+            &coef.compliance,
+            *options,
+            steps,
+        )?),
         _ => None,
     };
     if let Some(c) = contact.as_mut() {
         c.reset_stick_points(&u);
     }
-    let mut traces: Vec<Vec<f64>> = receivers.iter().map(|_| Vec::with_capacity(steps)).collect();
-    let crack_pairs = model.crack.as_ref().filter(|_| config.record_crack).map(|c| c.pairs.clone()).unwrap_or_default();
-    let mut crack_master: Vec<Vec<f64>> = crack_pairs.iter().map(|_| Vec::with_capacity(steps)).collect();
-    let mut crack_slave: Vec<Vec<f64>> = crack_pairs.iter().map(|_| Vec::with_capacity(steps)).collect();
+    let mut traces: Vec<Vec<f64>> = receivers
+        .iter()
+        .map(|_| Vec::with_capacity(steps))
+        .collect();
+    let crack_pairs = model
+        .crack
+        .as_ref()
+        .filter(|_| config.record_crack)
+        .map(|c| c.pairs.clone())
+        .unwrap_or_default();
+    let mut crack_master: Vec<Vec<f64>> = crack_pairs
+        .iter()
+        .map(|_| Vec::with_capacity(steps))
+        .collect();
+    let mut crack_slave: Vec<Vec<f64>> = crack_pairs
+        .iter()
+        .map(|_| Vec::with_capacity(steps))
+        .collect();
     let mut snapshots = Vec::new();
     let mut ledger = EnergyLedger::default();
     let mut flows = Flows::default();
@@ -123,7 +190,17 @@ pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], con
 
     for step in 0..steps {
         if step % config.ledger_every == 0 {
-            sample_ledger(model, dt, step, &u_prev, &u, &mut ku, &mut ledger, &flows, stab.dt_crit_s)?;
+            sample_ledger(
+                model,
+                dt,
+                step,
+                &u_prev,
+                &u,
+                &mut ku,
+                &mut ledger,
+                &flows,
+                stab.dt_crit_s,
+            )?;
         }
         fused_update(&model.stiffness, &coef.a, &u_prev, &u, &mut u_next);
         for (source, values) in sources.iter().zip(&forces) {
@@ -152,17 +229,30 @@ pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], con
         }
         for (source, values) in sources.iter().zip(&forces) {
             let f = values[step];
-            flows.source_work += 0.5 * f * source.weights.iter().map(|&(d, w)| w * (u_next[d] - u_prev[d])).sum::<f64>();
+            flows.source_work += 0.5
+                * f
+                * source
+                    .weights
+                    .iter()
+                    .map(|&(d, w)| w * (u_next[d] - u_prev[d]))
+                    .sum::<f64>();
         }
         for (r, t) in receivers.iter().zip(&mut traces) {
             t.push(trace_value(r, dt, &u_prev, &u, &u_next));
         }
-        for ((p, m), s) in crack_pairs.iter().zip(&mut crack_master).zip(&mut crack_slave) {
+        for ((p, m), s) in crack_pairs
+            .iter()
+            .zip(&mut crack_master)
+            .zip(&mut crack_slave)
+        {
             m.push(u[2 * p.master + 1]);
             s.push(u[2 * p.slave + 1]);
         }
         if config.snapshot_every.is_some_and(|k| step % k == 0) {
-            snapshots.push(Snapshot { time_s: step as f64 * dt, displacement: u.clone() });
+            snapshots.push(Snapshot {
+                time_s: step as f64 * dt,
+                displacement: u.clone(),
+            });
         }
         std::mem::swap(&mut u_prev, &mut u);
         std::mem::swap(&mut u, &mut u_next);
@@ -170,17 +260,43 @@ pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], con
             progress.set_position(step as u64);
         }
     }
-    sample_ledger(model, dt, steps, &u_prev, &u, &mut ku, &mut ledger, &flows, stab.dt_crit_s)?;
+    sample_ledger(
+        model,
+        dt,
+        steps,
+        &u_prev,
+        &u,
+        &mut ku,
+        &mut ledger,
+        &flows,
+        stab.dt_crit_s,
+    )?;
     progress.finish_and_clear();
     let wall_time_s = clock.elapsed().as_secs_f64();
 
-    let to_signal = |v: Vec<f64>| Signal { dt_s: dt, t0_s: 0.0, samples: v };
-    let crack = model.crack.as_ref().filter(|_| config.record_crack).map(|c| CrackTraces {
-        x_m: c.pairs.iter().map(|p| model.mesh.nodes[p.master][0]).collect(),
-        normal_gap: crack_master.iter().zip(&crack_slave).map(|(m, s)| to_signal(s.iter().zip(m).map(|(s, m)| s - m).collect())).collect(),
-        master_uy: crack_master.into_iter().map(to_signal).collect(),
-        slave_uy: crack_slave.into_iter().map(to_signal).collect(),
-    });
+    let to_signal = |v: Vec<f64>| Signal {
+        dt_s: dt,
+        t0_s: 0.0,
+        samples: v,
+    };
+    let crack = model
+        .crack
+        .as_ref()
+        .filter(|_| config.record_crack)
+        .map(|c| CrackTraces {
+            x_m: c
+                .pairs
+                .iter()
+                .map(|p| model.mesh.nodes[p.master][0])
+                .collect(),
+            normal_gap: crack_master
+                .iter()
+                .zip(&crack_slave)
+                .map(|(m, s)| to_signal(s.iter().zip(m).map(|(s, m)| s - m).collect()))
+                .collect(),
+            master_uy: crack_master.into_iter().map(to_signal).collect(),
+            slave_uy: crack_slave.into_iter().map(to_signal).collect(),
+        });
     let report = RunReport {
         integrator: "explicit central difference (lumped mass)".into(),
         wall_time_s,
@@ -207,14 +323,34 @@ pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], con
 
 /// Appends a ledger sample at t_{step-1/2} and stops a run that blew up.
 #[allow(clippy::too_many_arguments)]
-fn sample_ledger(model: &Model, dt: f64, step: usize, u_prev: &[f64], u: &[f64], ku: &mut [f64], ledger: &mut EnergyLedger, flows: &Flows, dt_crit: f64) -> Result<()> {
+fn sample_ledger(
+    model: &Model,
+    dt: f64,
+    step: usize,
+    u_prev: &[f64],
+    u: &[f64],
+    ku: &mut [f64],
+    ledger: &mut EnergyLedger,
+    flows: &Flows,
+    dt_crit: f64,
+) -> Result<()> {
     let (kinetic, strain) = staggered_energy(model, dt, u_prev, u, ku);
     let time_s = (step as f64 - 0.5) * dt;
-    let unstable = |reason: String| Error::Unstable { step, time_s, reason, dt_s: dt, dt_crit_s: dt_crit };
+    let unstable = |reason: String| Error::Unstable {
+        step,
+        time_s,
+        reason,
+        dt_s: dt,
+        dt_crit_s: dt_crit,
+    };
     if !(kinetic.is_finite() && strain.is_finite()) {
         return Err(unstable("displacements became non-finite".into()));
     }
-    let budget = ledger.initial_j + ledger.source_work_j.iter().fold(flows.source_work.abs(), |m, w| m.max(w.abs()));
+    let budget = ledger.initial_j
+        + ledger
+            .source_work_j
+            .iter()
+            .fold(flows.source_work.abs(), |m, w| m.max(w.abs()));
     if kinetic > BLOW_UP_FACTOR * budget && kinetic > 0.0 {
         return Err(unstable(format!("kinetic energy {kinetic:.3e} J/m grew above {BLOW_UP_FACTOR} times the energy put in ({budget:.3e} J/m)")));
     }

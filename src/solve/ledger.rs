@@ -39,8 +39,13 @@ impl EnergyLedger {
     /// Appends a sample; returns its relative residual.
     pub(crate) fn push(&mut self, time_s: f64, kinetic: f64, strain: f64, flows: &Flows) -> f64 {
         let contact_loss = -(flows.contact_normal_work + flows.contact_tangential_work);
-        let imbalance = kinetic + strain + flows.dashpot_loss + contact_loss - self.initial_j - flows.source_work;
-        let max_work = self.source_work_j.iter().fold(flows.source_work.abs(), |m, w| m.max(w.abs()));
+        let imbalance = kinetic + strain + flows.dashpot_loss + contact_loss
+            - self.initial_j
+            - flows.source_work;
+        let max_work = self
+            .source_work_j
+            .iter()
+            .fold(flows.source_work.abs(), |m, w| m.max(w.abs()));
         let scale = self.initial_j + max_work;
         let residual = if scale > 0.0 { imbalance / scale } else { 0.0 };
         self.time_s.push(time_s);
@@ -66,6 +71,10 @@ impl EnergyLedger {
 
     /// Total energy kinetic + strain at each sample.
     pub fn total_j(&self) -> Vec<f64> {
-        self.kinetic_j.iter().zip(&self.strain_j).map(|(k, s)| k + s).collect()
+        self.kinetic_j
+            .iter()
+            .zip(&self.strain_j)
+            .map(|(k, s)| k + s)
+            .collect()
     }
 }

@@ -85,6 +85,8 @@ pub struct RunConfig {
     pub contact: Option<ContactOptions>,
     /// Initial displacement (tests: free vibration), zero if `None`.
     pub initial_displacement: Option<Vec<f64>>,
+    /// Initial velocity, zero if `None`.
+    pub initial_velocity: Option<Vec<f64>>,
     /// Show a progress bar on a terminal.
     pub progress: bool,
     /// A precomputed stability estimate for this model, to skip the power iteration.
@@ -104,6 +106,7 @@ impl Default for RunConfig {
             record_crack: false,
             contact: None,
             initial_displacement: None,
+            initial_velocity: None,
             progress: false,
             stability: None,
         }
@@ -179,42 +182,75 @@ pub struct RunOutput {
 }
 
 /// Runs the model with the given sources and receivers.
-pub fn run(model: &Model, sources: &[Source], receivers: &[Receiver], config: &RunConfig) -> Result<RunOutput> {
+pub fn run(
+    model: &Model,
+    sources: &[Source],
+    receivers: &[Receiver],
+    config: &RunConfig,
+) -> Result<RunOutput> {
     require_positive("duration_s", config.duration_s)?;
     if let Some(dt) = config.dt_s {
         require_positive("dt_s", dt)?;
     }
     if !(config.step_safety > 0.0 && config.step_safety <= 1.0) {
-        return Err(Error::invalid("step_safety", config.step_safety, "must be in (0, 1]"));
+        return Err(Error::invalid(
+            "step_safety",
+            config.step_safety,
+            "must be in (0, 1]",
+        ));
     }
     if config.ledger_every == 0 {
         return Err(Error::invalid("ledger_every", 0, "must be at least 1"));
     }
     validate_weights(model, sources.iter().map(|s| ("source", &s.weights)))?;
     validate_weights(model, receivers.iter().map(|r| ("receiver", &r.weights)))?;
-    if let Some(u0) = &config.initial_displacement {
-        if u0.len() != model.dofs() || u0.iter().any(|v| !v.is_finite()) {
-            return Err(Error::invalid("initial_displacement", u0.len(), format!("needs {} finite values", model.dofs())));
+    for (field, initial) in [
+        ("initial_displacement", &config.initial_displacement),
+        ("initial_velocity", &config.initial_velocity),
+    ] {
+        if let Some(x) = initial {
+            if x.len() != model.dofs() || x.iter().any(|v| !v.is_finite()) {
+                return Err(Error::invalid(
+                    field,
+                    format!("{} values", x.len()),
+                    format!("needs {} finite values", model.dofs()),
+                ));
+            }
         }
     }
     match config.integrator {
         Integrator::Explicit => explicit::run(model, sources, receivers, config),
         Integrator::Newmark { consistent_mass } => {
             if config.contact.is_some() && model.crack.is_some() {
-                return Err(Error::invalid("integrator", "newmark", "contact is implemented for the explicit integrator only"));
+                return Err(Error::invalid(
+                    "integrator",
+                    "newmark",
+                    "contact is implemented for the explicit integrator only",
+                ));
             }
             newmark::run(model, sources, receivers, config, consistent_mass)
         }
     }
 }
 
-fn validate_weights<'a>(model: &Model, sets: impl Iterator<Item = (&'a str, &'a Vec<(usize, f64)>)>) -> Result<()> {
+fn validate_weights<'a>(
+    model: &Model,
+    sets: impl Iterator<Item = (&'a str, &'a Vec<(usize, f64)>)>,
+) -> Result<()> {
     for (i, (what, w)) in sets.enumerate() {
         if w.is_empty() {
-            return Err(Error::invalid(format!("{what}[{i}]"), "no DOFs", "selects no node of the mesh"));
+            return Err(Error::invalid(
+                format!("{what}[{i}]"),
+                "no DOFs",
+                "selects no node of the mesh",
+            ));
         }
         if let Some(&(d, v)) = w.iter().find(|(d, v)| *d >= model.dofs() || !v.is_finite()) {
-            return Err(Error::invalid(format!("{what}[{i}]"), format!("DOF {d} weight {v}"), format!("DOF must be < {} and weight finite", model.dofs())));
+            return Err(Error::invalid(
+                format!("{what}[{i}]"),
+                format!("DOF {d} weight {v}"),
+                format!("DOF must be < {} and weight finite", model.dofs()),
+            ));
         }
     }
     Ok(())
@@ -225,7 +261,11 @@ fn sample_sources(sources: &[Source], dt: f64, steps: usize) -> Result<Vec<Vec<f
     sources
         .iter()
         .map(|s| {
-            let sig = if ((s.signal.dt_s - dt) / dt).abs() < 1e-9 { s.signal.clone() } else { crate::signal::resample(&s.signal, dt)? };
+            let sig = if ((s.signal.dt_s - dt) / dt).abs() < 1e-9 {
+                s.signal.clone()
+            } else {
+                crate::signal::resample(&s.signal, dt)?
+            };
             Ok((0..steps)
                 .map(|n| {
                     let k = ((n as f64 * dt - sig.t0_s) / dt).round();
@@ -255,38 +295,84 @@ pub fn segment_shares(mesh: &Mesh, nodes: &[usize]) -> Vec<(usize, f64)> {
 
 /// A traction source on the boundary segment p..q in direction `angle_deg` (counter-clockwise
 /// from +x): force on each node = signal(t) * (cos, sin) * the node's length share.
-pub fn traction_source(mesh: &Mesh, p: [f64; 2], q: [f64; 2], angle_deg: f64, signal: Signal) -> Result<Source> {
+pub fn traction_source(
+    mesh: &Mesh,
+    p: [f64; 2],
+    q: [f64; 2],
+    angle_deg: f64,
+    signal: Signal,
+) -> Result<Source> {
     let nodes = mesh.nodes_on_segment(p, q);
     if nodes.len() < 2 {
-        return Err(Error::invalid("source.segment", format!("{p:?}..{q:?}"), "covers fewer than two mesh nodes"));
+        return Err(Error::invalid(
+            "source.segment",
+            format!("{p:?}..{q:?}"),
+            "covers fewer than two mesh nodes",
+        ));
     }
     let (s, c) = angle_deg.to_radians().sin_cos();
-    let weights = segment_shares(mesh, &nodes).into_iter().flat_map(|(n, l)| [(2 * n, c * l), (2 * n + 1, s * l)]).collect();
+    let weights = segment_shares(mesh, &nodes)
+        .into_iter()
+        .flat_map(|(n, l)| [(2 * n, c * l), (2 * n + 1, s * l)])
+        .collect();
     Ok(Source { weights, signal })
 }
 
 /// A point-force source on one node's DOF (tests and impulse responses).
 pub fn point_source(node: usize, component: usize, signal: Signal) -> Source {
-    Source { weights: vec![(2 * node + component, 1.0)], signal }
+    Source {
+        weights: vec![(2 * node + component, 1.0)],
+        signal,
+    }
 }
 
 /// A receiver of component `component` (0 = x, 1 = y) averaged over the segment p..q
 /// (a transducer face), or at the nearest node when p == q.
-pub fn segment_receiver(mesh: &Mesh, name: &str, p: [f64; 2], q: [f64; 2], component: usize, quantity: Quantity) -> Result<Receiver> {
+pub fn segment_receiver(
+    mesh: &Mesh,
+    name: &str,
+    p: [f64; 2],
+    q: [f64; 2],
+    component: usize,
+    quantity: Quantity,
+) -> Result<Receiver> {
     let (x0, x1, y0, y1) = mesh.bounds();
     let tol = mesh.tolerance();
     for pt in [p, q] {
         if !(pt[0] >= x0 - tol && pt[0] <= x1 + tol && pt[1] >= y0 - tol && pt[1] <= y1 + tol) {
-            return Err(Error::invalid(format!("receiver '{name}'"), format!("({}, {}) m", pt[0], pt[1]), format!("is outside the domain x [{x0}, {x1}], y [{y0}, {y1}]")));
+            return Err(Error::invalid(
+                format!("receiver '{name}'"),
+                format!("({}, {}) m", pt[0], pt[1]),
+                format!("is outside the domain x [{x0}, {x1}], y [{y0}, {y1}]"),
+            ));
         }
     }
-    let nodes = if p == q { vec![mesh.nearest_node(p)] } else { mesh.nodes_on_segment(p, q) };
-    let shares = if nodes.len() == 1 { vec![(nodes[0], 1.0)] } else { segment_shares(mesh, &nodes) };
+    let nodes = if p == q {
+        vec![mesh.nearest_node(p)]
+    } else {
+        mesh.nodes_on_segment(p, q)
+    };
+    let shares = if nodes.len() == 1 {
+        vec![(nodes[0], 1.0)]
+    } else {
+        segment_shares(mesh, &nodes)
+    };
     let total: f64 = shares.iter().map(|s| s.1).sum();
     if nodes.is_empty() || total <= 0.0 {
-        return Err(Error::invalid(format!("receiver '{name}'"), format!("{p:?}..{q:?}"), "covers no mesh node"));
+        return Err(Error::invalid(
+            format!("receiver '{name}'"),
+            format!("{p:?}..{q:?}"),
+            "covers no mesh node",
+        ));
     }
-    Ok(Receiver { name: name.into(), weights: shares.into_iter().map(|(n, w)| (2 * n + component, w / total)).collect(), quantity })
+    Ok(Receiver {
+        name: name.into(),
+        weights: shares
+            .into_iter()
+            .map(|(n, w)| (2 * n + component, w / total))
+            .collect(),
+        quantity,
+    })
 }
 
 /// A progress bar on stderr when `show` and stderr is a terminal; hidden otherwise.
@@ -296,7 +382,9 @@ fn progress_bar(show: bool, steps: usize) -> indicatif::ProgressBar {
         return indicatif::ProgressBar::hidden();
     }
     let bar = indicatif::ProgressBar::new(steps as u64);
-    if let Ok(style) = indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} steps ({eta} left)") {
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{elapsed_precise} [{bar:40}] {pos}/{len} steps ({eta} left)",
+    ) {
         bar.set_style(style);
     }
     bar

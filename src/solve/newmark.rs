@@ -6,7 +6,10 @@
 //! It conserves 1/2 v^T M v + 1/2 u^T K u exactly without damping and forces.
 
 use super::ledger::{EnergyLedger, Flows};
-use super::{sample_sources, stability, Quantity, Receiver, RunConfig, RunOutput, RunReport, Snapshot, Source};
+use super::{
+    sample_sources, stability, Quantity, Receiver, RunConfig, RunOutput, RunReport, Snapshot,
+    Source,
+};
 use crate::error::{Error, Result};
 use crate::fem::{assemble_consistent_mass, BlockCsr, Model};
 use crate::signal::Signal;
@@ -23,7 +26,10 @@ enum Mass {
 impl Mass {
     fn mul(&self, x: &[f64], out: &mut [f64]) {
         match self {
-            Mass::Lumped(m) => out.iter_mut().zip(m.iter().zip(x)).for_each(|(o, (m, x))| *o = m * x),
+            Mass::Lumped(m) => out
+                .iter_mut()
+                .zip(m.iter().zip(x))
+                .for_each(|(o, (m, x))| *o = m * x),
             Mass::Consistent(m) => m.mul(x, out),
         }
     }
@@ -39,30 +45,59 @@ impl Mass {
 type Llt = faer::sparse::linalg::solvers::Llt<usize, f64>;
 
 /// Factors sum_k scale_k A_k (+ diagonal extra) with fixed DOFs replaced by identity rows.
-fn factor(n: usize, fixed: &[bool], fill: impl Fn(&mut dyn FnMut(usize, usize, f64))) -> Result<Llt> {
+fn factor(
+    n: usize,
+    fixed: &[bool],
+    fill: impl Fn(&mut dyn FnMut(usize, usize, f64)),
+) -> Result<Llt> {
     let mut triplets = Vec::new();
     fill(&mut |i, j, v| {
         if !fixed[i] && !fixed[j] && v != 0.0 {
             triplets.push(Triplet::new(i, j, v));
         }
     });
-    triplets.extend((0..n).filter(|&d| fixed[d]).map(|d| Triplet::new(d, d, 1.0)));
-    let s = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets).map_err(|e| Error::invalid("newmark matrix", format!("{e:?}"), "could not be built"))?;
-    s.sp_cholesky(faer::Side::Lower).map_err(|e| Error::invalid("newmark matrix", format!("{e:?}"), "is not positive definite (is the model constrained?)"))
+    triplets.extend(
+        (0..n)
+            .filter(|&d| fixed[d])
+            .map(|d| Triplet::new(d, d, 1.0)),
+    );
+    let s = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets)
+        .map_err(|e| Error::invalid("newmark matrix", format!("{e:?}"), "could not be built"))?;
+    s.sp_cholesky(faer::Side::Lower).map_err(|e| {
+        Error::invalid(
+            "newmark matrix",
+            format!("{e:?}"),
+            "is not positive definite (is the model constrained?)",
+        )
+    })
 }
 
 /// Runs Newmark average acceleration.
-pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], config: &RunConfig, consistent_mass: bool) -> Result<RunOutput> {
+pub(super) fn run(
+    model: &Model,
+    sources: &[Source],
+    receivers: &[Receiver],
+    config: &RunConfig,
+    consistent_mass: bool,
+) -> Result<RunOutput> {
     let setup = Instant::now();
-    let stab = config.stability.unwrap_or_else(|| stability::estimate(model));
-    let dt = config.dt_s.ok_or_else(|| Error::invalid("dt_s", "none", "Newmark needs an explicit time step"))?;
+    let stab = config
+        .stability
+        .unwrap_or_else(|| stability::estimate(model));
+    let dt = config
+        .dt_s
+        .ok_or_else(|| Error::invalid("dt_s", "none", "Newmark needs an explicit time step"))?;
     let steps = (config.duration_s / dt).round().max(1.0) as usize;
     let n = model.dofs();
     let mut fixed = vec![false; n];
     for &d in &model.fixed_dofs {
         fixed[d] = true;
     }
-    let mass = if consistent_mass { Mass::Consistent(assemble_consistent_mass(&model.mesh, &model.materials)?) } else { Mass::Lumped(model.lumped_mass.clone()) };
+    let mass = if consistent_mass {
+        Mass::Consistent(assemble_consistent_mass(&model.mesh, &model.materials)?)
+    } else {
+        Mass::Lumped(model.lumped_mass.clone())
+    };
     let effective = factor(n, &fixed, |add| {
         model.stiffness.for_each_entry(&mut *add);
         mass.for_each_entry(|i, j, v| add(i, j, 4.0 / (dt * dt) * v));
@@ -79,21 +114,36 @@ pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], con
         }
     };
 
-    let mut u = config.initial_displacement.clone().unwrap_or_else(|| vec![0.0; n]);
-    let mut v = vec![0.0; n];
+    let mut u = config
+        .initial_displacement
+        .clone()
+        .unwrap_or_else(|| vec![0.0; n]);
+    let mut v = config
+        .initial_velocity
+        .clone()
+        .unwrap_or_else(|| vec![0.0; n]);
     let mut work = vec![0.0; n];
     let mut rhs = faer::Mat::<f64>::zeros(n, 1);
-    // a_0 = M^-1 (f_0 - K u_0)
+    // a_0 = M^-1 (f_0 - K u_0 - C v_0)
     for (d, &f) in fixed.iter().enumerate() {
         if f {
             u[d] = 0.0;
+            v[d] = 0.0;
         }
     }
     model.stiffness.mul(&u, &mut work);
+    for &(d, c) in &model.dashpots {
+        work[d] += c * v[d];
+    }
     work.iter_mut().for_each(|w| *w = -*w);
     add_forces(0, &mut work);
     let mut a = match &mass {
-        Mass::Lumped(m) => work.iter().zip(m).enumerate().map(|(d, (f, m))| if fixed[d] { 0.0 } else { f / m }).collect::<Vec<f64>>(),
+        Mass::Lumped(m) => work
+            .iter()
+            .zip(m)
+            .enumerate()
+            .map(|(d, (f, m))| if fixed[d] { 0.0 } else { f / m })
+            .collect::<Vec<f64>>(),
         Mass::Consistent(m) => {
             let llt = factor(n, &fixed, |add| m.for_each_entry(&mut *add))?;
             let col = rhs.col_as_slice_mut(0);
@@ -105,7 +155,10 @@ pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], con
         }
     };
     let mut u_next = vec![0.0; n];
-    let mut traces: Vec<Vec<f64>> = receivers.iter().map(|_| Vec::with_capacity(steps)).collect();
+    let mut traces: Vec<Vec<f64>> = receivers
+        .iter()
+        .map(|_| Vec::with_capacity(steps))
+        .collect();
     let mut snapshots = Vec::new();
     let mut ledger = EnergyLedger::default();
     let mut flows = Flows::default();
@@ -117,14 +170,32 @@ pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], con
 
     for step in 0..steps {
         if step % config.ledger_every == 0 {
-            sample(model, &mass, step, dt, &u, &v, &mut work, &mut ledger, &flows, stab.dt_crit_s)?;
+            sample(
+                model,
+                &mass,
+                step,
+                dt,
+                &u,
+                &v,
+                &mut work,
+                &mut ledger,
+                &flows,
+                stab.dt_crit_s,
+            )?;
         }
         for (r, t) in receivers.iter().zip(&mut traces) {
-            let x = if r.quantity == Quantity::Displacement { &u } else { &v };
+            let x = if r.quantity == Quantity::Displacement {
+                &u
+            } else {
+                &v
+            };
             t.push(r.weights.iter().map(|&(d, w)| w * x[d]).sum());
         }
         if config.snapshot_every.is_some_and(|k| step % k == 0) {
-            snapshots.push(Snapshot { time_s: step as f64 * dt, displacement: u.clone() });
+            snapshots.push(Snapshot {
+                time_s: step as f64 * dt,
+                displacement: u.clone(),
+            });
         }
         for d in 0..n {
             u_next[d] = c1 * u[d] + c2 * v[d] + a[d];
@@ -145,7 +216,11 @@ pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], con
         u_next.copy_from_slice(rhs.col_as_slice(0));
         for (s, values) in sources.iter().zip(&forces) {
             let f = 0.5 * (values[step] + values[step + 1]);
-            flows.source_work += f * s.weights.iter().map(|&(d, w)| w * (u_next[d] - u[d])).sum::<f64>();
+            flows.source_work += f * s
+                .weights
+                .iter()
+                .map(|&(d, w)| w * (u_next[d] - u[d]))
+                .sum::<f64>();
         }
         for d in 0..n {
             let a_next = c1 * (u_next[d] - u[d]) - c2 * v[d] - a[d];
@@ -162,10 +237,28 @@ pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], con
             progress.set_position(step as u64);
         }
     }
-    sample(model, &mass, steps, dt, &u, &v, &mut work, &mut ledger, &flows, stab.dt_crit_s)?;
+    sample(
+        model,
+        &mass,
+        steps,
+        dt,
+        &u,
+        &v,
+        &mut work,
+        &mut ledger,
+        &flows,
+        stab.dt_crit_s,
+    )?;
     progress.finish_and_clear();
     let report = RunReport {
-        integrator: format!("Newmark average acceleration ({} mass)", if consistent_mass { "consistent" } else { "lumped" }),
+        integrator: format!(
+            "Newmark average acceleration ({} mass)",
+            if consistent_mass {
+                "consistent"
+            } else {
+                "lumped"
+            }
+        ),
         wall_time_s: clock.elapsed().as_secs_f64(),
         setup_time_s,
         steps,
@@ -180,7 +273,14 @@ pub(super) fn run(model: &Model, sources: &[Source], receivers: &[Receiver], con
     };
     Ok(RunOutput {
         report,
-        traces: traces.into_iter().map(|t| Signal { dt_s: dt, t0_s: 0.0, samples: t }).collect(),
+        traces: traces
+            .into_iter()
+            .map(|t| Signal {
+                dt_s: dt,
+                t0_s: 0.0,
+                samples: t,
+            })
+            .collect(),
         receiver_names: receivers.iter().map(|r| r.name.clone()).collect(),
         crack: None,
         snapshots,
@@ -198,13 +298,30 @@ fn energy(model: &Model, mass: &Mass, u: &[f64], v: &[f64], work: &mut [f64]) ->
 }
 
 #[allow(clippy::too_many_arguments)]
-fn sample(model: &Model, mass: &Mass, step: usize, dt: f64, u: &[f64], v: &[f64], work: &mut [f64], ledger: &mut EnergyLedger, flows: &Flows, dt_crit: f64) -> Result<()> {
+fn sample(
+    model: &Model,
+    mass: &Mass,
+    step: usize,
+    dt: f64,
+    u: &[f64],
+    v: &[f64],
+    work: &mut [f64],
+    ledger: &mut EnergyLedger,
+    flows: &Flows,
+    dt_crit: f64,
+) -> Result<()> {
     mass.mul(v, work);
     let kinetic = 0.5 * v.iter().zip(work.iter()).map(|(a, b)| a * b).sum::<f64>();
     model.stiffness.mul(u, work);
     let strain = 0.5 * u.iter().zip(work.iter()).map(|(a, b)| a * b).sum::<f64>();
     if !(kinetic.is_finite() && strain.is_finite()) {
-        return Err(Error::Unstable { step, time_s: step as f64 * dt, reason: "non-finite energy".into(), dt_s: dt, dt_crit_s: dt_crit });
+        return Err(Error::Unstable {
+            step,
+            time_s: step as f64 * dt,
+            reason: "non-finite energy".into(),
+            dt_s: dt,
+            dt_crit_s: dt_crit,
+        });
     }
     ledger.push(step as f64 * dt, kinetic, strain, flows);
     Ok(())

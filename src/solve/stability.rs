@@ -25,7 +25,11 @@ const TOLERANCE: f64 = 1e-7;
 /// Estimates the critical step of lumped-mass central difference for `model`.
 pub fn estimate(model: &Model) -> StabilityEstimate {
     let (lambda, iterations) = power_iteration(model);
-    StabilityEstimate { dt_crit_s: 2.0 / lambda.sqrt(), dt_element_bound_s: element_bound(model), iterations }
+    StabilityEstimate {
+        dt_crit_s: 2.0 / lambda.sqrt(),
+        dt_element_bound_s: element_bound(model),
+        iterations,
+    }
 }
 
 fn element_bound(model: &Model) -> f64 {
@@ -37,7 +41,10 @@ fn element_bound(model: &Model) -> f64 {
         .map(|(e, &t)| {
             let m = &model.materials[mesh.element_material[e]];
             let k = element::stiffness(t.map(|n| mesh.nodes[n]), &m.stiffness_pa);
-            element::omega_squared_bound(&k, element::lumped_mass(0.5 * mesh.twice_area(t), m.density_kg_m3))
+            element::omega_squared_bound(
+                &k,
+                element::lumped_mass(0.5 * mesh.twice_area(t), m.density_kg_m3),
+            )
         })
         .fold(0.0, f64::max);
     2.0 / omega2.sqrt()
@@ -53,7 +60,19 @@ fn power_iteration(model: &Model) -> (f64, usize) {
         free[d] = false;
     }
     // Deterministic start with components in every mode: a hashed +-1 pattern.
-    let mut x: Vec<f64> = (0..n).map(|i| if free[i] { if (i.wrapping_mul(2654435761) >> 7) & 1 == 0 { 1.0 } else { -1.0 } } else { 0.0 }).collect();
+    let mut x: Vec<f64> = (0..n)
+        .map(|i| {
+            if free[i] {
+                if (i.wrapping_mul(2654435761) >> 7) & 1 == 0 {
+                    1.0
+                } else {
+                    -1.0
+                }
+            } else {
+                0.0
+            }
+        })
+        .collect();
     let (mut y, mut scaled) = (vec![0.0; n], vec![0.0; n]);
     let mut history = [0.0f64; 20];
     let mut lambda = 0.0;
