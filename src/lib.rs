@@ -13,7 +13,9 @@ pub mod laminate;
 pub mod material;
 pub mod mesh;
 pub mod plot;
+pub mod scene;
 pub mod signal;
 pub mod solve;
+pub mod trnews;
 
 pub use error::{Error, Result};

@@ -1,0 +1,406 @@
+//! A whole experiment setup, described by data (a Rhai object map or JSON) and built into a
+//! model: laminate -> mesh -> crack -> model, plus the transmitter and the receivers
+//! (report Sec. 5.1, Fig. 14). A scene builds only what it names: no crack means no contact
+//! pairs, no absorbing side means no dashpots.
+
+use crate::contact::ContactOptions;
+use crate::error::{require_positive, Error, Result};
+use crate::fem::Model;
+use crate::laminate::{Laminate, Layer, StochasticSpec};
+use crate::material::{Orthotropic, Plane};
+use crate::mesh::{Mesh, Side};
+use crate::signal::Signal;
+use crate::solve::{
+    self, segment_receiver, traction_source, Quantity, Receiver, RunConfig, RunOutput,
+    StabilityEstimate,
+};
+use serde::{Deserialize, Serialize};
+
+/// How the layer stack is made.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind", deny_unknown_fields)]
+pub enum LaminateSpec {
+    /// The stochastic CFRP laminate of Sec. 2.2.1.
+    Stochastic(StochasticSpec),
+    /// Explicit layers from the top surface down, each a preset material name and a thickness.
+    Layers {
+        /// (preset name, thickness in m), top first.
+        layers: Vec<(String, f64)>,
+    },
+}
+
+impl Default for LaminateSpec {
+    fn default() -> Self {
+        LaminateSpec::Stochastic(StochasticSpec::default())
+    }
+}
+
+/// The transmitter: a traction on a segment of the right edge (report Fig. 14).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TransmitterSpec {
+    /// Depth of the segment's upper end below the top surface (m).
+    pub depth_top_m: f64,
+    /// Depth of the segment's lower end (m).
+    pub depth_bottom_m: f64,
+    /// Direction of the traction, degrees counter-clockwise from +x. 110 = 70 degrees from the
+    /// right edge's inward normal (-x), turned toward the top surface (report: 70 degrees).
+    pub angle_deg: f64,
+    /// Peak traction of transmitted signals (Pa); report: 50 kPa.
+    pub peak_pa: f64,
+}
+
+impl Default for TransmitterSpec {
+    fn default() -> Self {
+        TransmitterSpec {
+            depth_top_m: 1e-3,
+            depth_bottom_m: 4e-3,
+            angle_deg: 110.0,
+            peak_pa: 50e3,
+        }
+    }
+}
+
+/// Receivers on the top surface, numbered 1.. from left to right (the last one nearest the
+/// transmitter, like the report's receiver 5).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReceiverSpec {
+    /// x positions (m).
+    pub x_m: Vec<f64>,
+    /// Width of the transducer face averaged over (m); 0 records the nearest node.
+    pub aperture_m: f64,
+    /// Recorded component: 0 = u_x, 1 = u_y (default, like a normal-incidence transducer).
+    pub component: usize,
+    /// Displacement or velocity.
+    pub quantity: Quantity,
+}
+
+impl Default for ReceiverSpec {
+    fn default() -> Self {
+        ReceiverSpec {
+            x_m: vec![4e-3, 6e-3, 8e-3, 10e-3, 12e-3],
+            aperture_m: 0.0,
+            component: 1,
+            quantity: Quantity::Displacement,
+        }
+    }
+}
+
+/// A horizontal crack with contacting faces (report Sec. 4.9).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CrackSpec {
+    /// Depth below the top surface (m); snapped to the nearest mesh row line.
+    pub depth_m: f64,
+    /// x of the crack centre (m); `None` puts it under the middle receiver.
+    pub x_center_m: Option<f64>,
+    /// Length (m).
+    pub length_m: f64,
+    /// Contact on the faces; `None` leaves the crack open (faces pass freely).
+    pub contact: Option<ContactOptions>,
+}
+
+impl Default for CrackSpec {
+    fn default() -> Self {
+        CrackSpec {
+            depth_m: 2e-3,
+            x_center_m: None,
+            length_m: 2e-3,
+            contact: Some(ContactOptions::default()),
+        }
+    }
+}
+
+/// Everything that defines a scene. `Default` is the report's configuration at the quick
+/// resolution; [`SceneSpec::paper`] refines the mesh.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SceneSpec {
+    /// Layer stack.
+    pub laminate: LaminateSpec,
+    /// 2D idealisation.
+    pub plane: Plane,
+    /// Width of the modelled region (m).
+    pub width_m: f64,
+    /// Element size along x (m): must resolve the shortest wavelength (epoxy shear at 2 MHz: 0.52 mm).
+    pub element_size_x_m: f64,
+    /// Largest element height (m); thin layers get at least one row.
+    pub element_size_y_m: f64,
+    /// Sides with Lysmer-Kuhlemeyer dashpots (report Fig. 3: bottom and left).
+    pub absorbing: Vec<Side>,
+    /// Fix both DOFs of the two bottom corners against rigid drift (report Fig. 3: four fixed DOFs).
+    pub fix_bottom_corners: bool,
+    /// The transmitter.
+    pub transmitter: TransmitterSpec,
+    /// The receivers.
+    pub receivers: ReceiverSpec,
+    /// The crack, if any.
+    pub crack: Option<CrackSpec>,
+}
+
+impl Default for SceneSpec {
+    fn default() -> Self {
+        SceneSpec {
+            laminate: LaminateSpec::default(),
+            plane: Plane::Strain,
+            width_m: 16e-3,
+            element_size_x_m: 60e-6,
+            element_size_y_m: 40e-6,
+            absorbing: vec![Side::Bottom, Side::Left],
+            fix_bottom_corners: true,
+            transmitter: TransmitterSpec::default(),
+            receivers: ReceiverSpec::default(),
+            crack: Some(CrackSpec::default()),
+        }
+    }
+}
+
+impl SceneSpec {
+    /// The default scene at the `paper` resolution: 20 um columns, 10 um rows (DESIGN.md:
+    /// ~0.3% error in the low-passed surface response of the layered stack).
+    pub fn paper() -> SceneSpec {
+        SceneSpec {
+            element_size_x_m: 20e-6,
+            element_size_y_m: 10e-6,
+            ..Default::default()
+        }
+    }
+
+    /// The same scene without its crack.
+    pub fn uncracked(&self) -> SceneSpec {
+        SceneSpec {
+            crack: None,
+            ..self.clone()
+        }
+    }
+}
+
+/// A built scene: the model, the transmitter's nodal weights, the receivers.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// What it was built from.
+    pub spec: SceneSpec,
+    /// The layer stack.
+    pub laminate: Laminate,
+    /// The discrete model.
+    pub model: Model,
+    /// Transmitter nodal weights per unit traction.
+    pub transmitter: Vec<(usize, f64)>,
+    /// Receivers 1..n.
+    pub receivers: Vec<Receiver>,
+    /// Contact options of the crack (None: no crack, or an open crack).
+    pub contact: Option<ContactOptions>,
+    /// Explicit stability estimate, computed once.
+    pub stability: StabilityEstimate,
+}
+
+fn build_laminate(spec: &LaminateSpec, plane: Plane) -> Result<Laminate> {
+    match spec {
+        LaminateSpec::Stochastic(s) => Laminate::stochastic(s, plane),
+        LaminateSpec::Layers { layers } => {
+            let mut names: Vec<&str> = Vec::new();
+            let mut stack = Vec::new();
+            for (name, thickness_m) in layers.iter().rev() {
+                let material = names.iter().position(|n| n == name).unwrap_or_else(|| {
+                    names.push(name);
+                    names.len() - 1
+                });
+                stack.push(Layer {
+                    material,
+                    thickness_m: *thickness_m,
+                });
+            }
+            let materials = names
+                .iter()
+                .map(|n| Orthotropic::preset(n)?.reduce(plane))
+                .collect::<Result<Vec<_>>>()?;
+            Laminate::from_layers(materials, stack)
+        }
+    }
+}
+
+impl Scene {
+    /// Builds the scene: laminate, layer-conforming mesh (conforming also to the crack), the
+    /// crack's node pairs, K, M, dashpots, transmitter, receivers, and the stability estimate.
+    pub fn build(spec: &SceneSpec) -> Result<Scene> {
+        require_positive("width_m", spec.width_m)?;
+        let laminate = build_laminate(&spec.laminate, spec.plane)?;
+        let height = laminate.thickness_m();
+        let crack_geometry = spec
+            .crack
+            .as_ref()
+            .map(|c| crack_geometry(spec, c, height))
+            .transpose()?;
+        let (x_breaks, y_breaks) = match crack_geometry {
+            Some((y, x0, x1)) => (vec![x0, x1], vec![y]),
+            None => (vec![], vec![]),
+        };
+        let mut mesh = Mesh::layered(
+            &laminate,
+            spec.width_m,
+            spec.element_size_x_m,
+            spec.element_size_y_m,
+            &x_breaks,
+            &y_breaks,
+        )?;
+        let crack = match crack_geometry {
+            Some((y, x0, x1)) => {
+                let snap = |v: Option<f64>| {
+                    v.ok_or_else(|| Error::Mesh("crack needs a structured mesh".into()))
+                };
+                Some(mesh.insert_crack(
+                    snap(mesh.nearest_row_y(y))?,
+                    snap(mesh.nearest_column_x(x0))?,
+                    snap(mesh.nearest_column_x(x1))?,
+                )?)
+            }
+            None => None,
+        };
+        let fixed = if spec.fix_bottom_corners {
+            bottom_corner_dofs(&mesh)
+        } else {
+            vec![]
+        };
+        let transmitter = transmitter_weights(&mesh, &spec.transmitter, height, spec.width_m)?;
+        let receivers = build_receivers(&mesh, &spec.receivers, height)?;
+        let contact = spec.crack.as_ref().and_then(|c| c.contact);
+        let model = Model::build(
+            mesh,
+            laminate.materials.clone(),
+            &spec.absorbing,
+            fixed,
+            crack,
+        )?;
+        let stability = solve::stability::estimate(&model);
+        Ok(Scene {
+            spec: spec.clone(),
+            laminate,
+            model,
+            transmitter,
+            receivers,
+            contact,
+            stability,
+        })
+    }
+
+    /// True when the scene is linear time-invariant: no crack, or a crack without contact.
+    pub fn is_linear(&self) -> bool {
+        self.model.crack.is_none() || self.contact.is_none()
+    }
+
+    /// A run configuration for this scene: its contact options and stability estimate.
+    pub fn run_config(&self, duration_s: f64) -> RunConfig {
+        RunConfig {
+            duration_s,
+            contact: self.contact,
+            stability: Some(self.stability),
+            ..Default::default()
+        }
+    }
+
+    /// Transmits `traction` (Pa) from the transmitter and records every receiver.
+    pub fn transmit(&self, traction: &Signal, config: &RunConfig) -> Result<RunOutput> {
+        let source = solve::Source {
+            weights: self.transmitter.clone(),
+            signal: traction.clone(),
+        };
+        solve::run(&self.model, &[source], &self.receivers, config)
+    }
+
+    /// The time step runs of this scene use by default (0.9 dt_crit).
+    pub fn default_dt_s(&self) -> f64 {
+        0.9 * self.stability.dt_crit_s
+    }
+}
+
+/// Crack line and tips (m) from its spec, checked against the domain.
+fn crack_geometry(spec: &SceneSpec, c: &CrackSpec, height: f64) -> Result<(f64, f64, f64)> {
+    require_positive("crack.length_m", c.length_m)?;
+    require_positive("crack.depth_m", c.depth_m)?;
+    let middle = spec
+        .receivers
+        .x_m
+        .get(spec.receivers.x_m.len() / 2)
+        .copied()
+        .unwrap_or(0.5 * spec.width_m);
+    let xc = c.x_center_m.unwrap_or(middle);
+    let (x0, x1, y) = (
+        xc - 0.5 * c.length_m,
+        xc + 0.5 * c.length_m,
+        height - c.depth_m,
+    );
+    if !(x0 > 0.0 && x1 < spec.width_m && y > 0.0) {
+        return Err(Error::invalid(
+            "crack",
+            format!("x {x0:.4e}..{x1:.4e} m at depth {:.4e} m", c.depth_m),
+            format!(
+                "must lie inside the {:.4e} x {height:.4e} m region",
+                spec.width_m
+            ),
+        ));
+    }
+    Ok((y, x0, x1))
+}
+
+fn bottom_corner_dofs(mesh: &Mesh) -> Vec<usize> {
+    let bottom = mesh.side_nodes(Side::Bottom);
+    [bottom.first(), bottom.last()]
+        .into_iter()
+        .flatten()
+        .flat_map(|&n| [2 * n, 2 * n + 1])
+        .collect()
+}
+
+fn transmitter_weights(
+    mesh: &Mesh,
+    t: &TransmitterSpec,
+    height: f64,
+    width: f64,
+) -> Result<Vec<(usize, f64)>> {
+    if !(t.depth_top_m >= 0.0 && t.depth_bottom_m > t.depth_top_m && t.depth_bottom_m <= height) {
+        return Err(Error::invalid(
+            "transmitter",
+            format!("depth {}..{} m", t.depth_top_m, t.depth_bottom_m),
+            format!("needs 0 <= depth_top < depth_bottom <= {height:.4e} m"),
+        ));
+    }
+    let unit = Signal {
+        dt_s: 1.0,
+        t0_s: 0.0,
+        samples: vec![1.0],
+    };
+    Ok(traction_source(
+        mesh,
+        [width, height - t.depth_top_m],
+        [width, height - t.depth_bottom_m],
+        t.angle_deg,
+        unit,
+    )?
+    .weights)
+}
+
+fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Receiver>> {
+    if r.component > 1 {
+        return Err(Error::invalid(
+            "receivers.component",
+            r.component,
+            "must be 0 (u_x) or 1 (u_y)",
+        ));
+    }
+    r.x_m
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| {
+            let half = 0.5 * r.aperture_m;
+            segment_receiver(
+                mesh,
+                &format!("receiver {}", i + 1),
+                [x - half, height],
+                [x + half, height],
+                r.component,
+                r.quantity,
+            )
+        })
+        .collect()
+}

@@ -1,0 +1,468 @@
+//! The TR-NEWS procedure (report Sec. 3, eqs 6-9), delayed TR-NEWS (eqs 10-11) and pulse
+//! inversion (Sec. 5.3) on a [`Scene`].
+//!
+//! A scene without a contacting crack is linear and time-invariant in discrete time: its
+//! response to any transmitted traction s is exactly y_n = sum_k s_k h_{n-k}, with h the
+//! response to a unit impulse at step 0 (DESIGN.md). A [`Responder`] for such a scene runs
+//! that one simulation and answers every later transmission by convolution; for a cracked
+//! scene it simulates each transmission, in parallel when there are several.
+
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+use crate::signal::{self, Peak, SideLobes, Signal};
+use crate::solve::RunReport;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Recorded responses of every receiver to one transmission.
+#[derive(Clone, Debug)]
+pub struct Response {
+    /// One trace per receiver, from t = 0 at the solver step.
+    pub traces: Vec<Signal>,
+    /// The run report, when the response was simulated (None when convolved).
+    pub report: Option<RunReport>,
+}
+
+/// Answers "what do the receivers record when the transmitter sends s?".
+pub struct Responder<'a> {
+    scene: &'a Scene,
+    dt_s: f64,
+    /// Response to a unit impulse, per receiver, when the scene is linear.
+    impulse: Option<Response>,
+}
+
+impl<'a> Responder<'a> {
+    /// Simulates every transmission (any scene).
+    pub fn simulating(scene: &'a Scene) -> Responder<'a> {
+        Responder {
+            scene,
+            dt_s: scene.default_dt_s(),
+            impulse: None,
+        }
+    }
+
+    /// For a linear scene, runs the impulse response once (over `duration_s`) and convolves
+    /// afterwards; for a nonlinear scene, the same as [`Responder::simulating`].
+    pub fn new(scene: &'a Scene, duration_s: f64) -> Result<Responder<'a>> {
+        let mut r = Self::simulating(scene);
+        if scene.is_linear() {
+            let unit = Signal {
+                dt_s: r.dt_s,
+                t0_s: 0.0,
+                samples: vec![1.0],
+            };
+            let out = scene.transmit(&unit, &r.run_config(duration_s))?;
+            r.impulse = Some(Response {
+                traces: out.traces,
+                report: Some(out.report),
+            });
+        }
+        Ok(r)
+    }
+
+    /// The solver step of every response (s).
+    pub fn dt_s(&self) -> f64 {
+        self.dt_s
+    }
+
+    /// The impulse-response run's report, when responses are convolved.
+    pub fn impulse_report(&self) -> Option<&RunReport> {
+        self.impulse.as_ref().and_then(|i| i.report.as_ref())
+    }
+
+    fn run_config(&self, duration_s: f64) -> crate::solve::RunConfig {
+        crate::solve::RunConfig {
+            dt_s: Some(self.dt_s),
+            ..self.scene.run_config(duration_s)
+        }
+    }
+
+    /// Receivers' responses to the traction `s` (Pa) over `duration_s`.
+    pub fn respond(&self, s: &Signal, duration_s: f64) -> Result<Response> {
+        let s = if (s.dt_s / self.dt_s - 1.0).abs() > 1e-9 {
+            signal::resample(s, self.dt_s)?
+        } else {
+            s.clone()
+        };
+        match &self.impulse {
+            Some(h) => {
+                let n = (duration_s / self.dt_s).round() as usize;
+                if n > h.traces[0].len() {
+                    return Err(Error::invalid(
+                        "duration_s",
+                        duration_s,
+                        format!(
+                            "exceeds the impulse response length {:.4e} s",
+                            h.traces[0].duration_s()
+                        ),
+                    ));
+                }
+                let traces = h
+                    .traces
+                    .iter()
+                    .map(|h| Ok(truncate(signal::convolve_discrete(&s, h)?, n)))
+                    .collect::<Result<Vec<_>>>()?;
+                Ok(Response {
+                    traces,
+                    report: None,
+                })
+            }
+            None => {
+                let out = self.scene.transmit(&s, &self.run_config(duration_s))?;
+                Ok(Response {
+                    traces: out.traces,
+                    report: Some(out.report),
+                })
+            }
+        }
+    }
+
+    /// Responses to several transmissions; independent simulations run in parallel, and the
+    /// results are identical for any thread count.
+    pub fn respond_all(&self, sources: &[Signal], duration_s: f64) -> Result<Vec<Response>> {
+        sources
+            .par_iter()
+            .map(|s| self.respond(s, duration_s))
+            .collect()
+    }
+}
+
+/// The first n samples on the grid starting at t = 0 (zero-padded if shorter).
+fn truncate(s: Signal, n: usize) -> Signal {
+    let offset = (s.t0_s / s.dt_s).round() as i64;
+    let samples = (0..n as i64)
+        .map(|k| {
+            usize::try_from(k - offset)
+                .ok()
+                .and_then(|i| s.samples.get(i))
+                .copied()
+                .unwrap_or(0.0)
+        })
+        .collect();
+    Signal {
+        dt_s: s.dt_s,
+        t0_s: 0.0,
+        samples,
+    }
+}
+
+/// Parameters of the TR-NEWS procedure (report Sec. 3 and 5.1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrNewsSpec {
+    /// Chirp start frequency (report: 0.2 MHz).
+    pub f0_hz: f64,
+    /// Chirp end frequency (report: 2 MHz).
+    pub f1_hz: f64,
+    /// Chirp length t1 (report: 30 us).
+    pub chirp_s: f64,
+    /// Length of the transmitted chirp signal, zero after t1 (report: 60 us).
+    pub signal_s: f64,
+    /// Tukey taper fraction of the chirp (0: none).
+    pub taper: f64,
+    /// Duration T of the recorded coda response y (s).
+    pub record_s: f64,
+    /// Lag window [0, window_s] of the correlation Gamma; the time-reversed Gamma focuses at
+    /// t = window_s (s).
+    pub window_s: f64,
+    /// Recording time after the focus in the focusing runs (s).
+    pub after_focus_s: f64,
+    /// Receivers to focus on, 1-based; empty = all.
+    pub receivers: Vec<usize>,
+    /// Also transmit the inverted focusing signal and form the pulse-inversion sum.
+    pub pulse_inversion: bool,
+    /// Half width of the main lobe for the side-lobe measures (s).
+    pub main_lobe_half_width_s: f64,
+}
+
+impl Default for TrNewsSpec {
+    fn default() -> Self {
+        TrNewsSpec {
+            f0_hz: 0.2e6,
+            f1_hz: 2e6,
+            chirp_s: 30e-6,
+            signal_s: 60e-6,
+            taper: 0.0,
+            record_s: 60e-6,
+            window_s: 60e-6,
+            after_focus_s: 30e-6,
+            receivers: vec![],
+            pulse_inversion: false,
+            main_lobe_half_width_s: 1e-6,
+        }
+    }
+}
+
+/// TR-NEWS focusing at one receiver.
+#[derive(Clone, Debug)]
+pub struct Focus {
+    /// Receiver number (1-based).
+    pub receiver: usize,
+    /// Gamma(tau) = sum_n y(t_n + tau) c(t_n) dt over the lag window (eq 8 as a correlation).
+    pub gamma: Signal,
+    /// The transmitted focusing signal Gamma(T - t), scaled to the transmitter's peak traction.
+    pub source: Signal,
+    /// The focused signal y_TR at the receiver.
+    pub focused: Signal,
+    /// Peak of the focused signal.
+    pub peak: Peak,
+    /// Side lobes around the expected focus time (window_s).
+    pub side_lobes: SideLobes,
+    /// Response to the inverted source, with pulse inversion.
+    pub inverted: Option<Signal>,
+    /// Pulse-inversion sum focused + inverted (the nonlinear even part).
+    pub pi_sum: Option<Signal>,
+    /// Reports of the focusing runs (empty when convolved).
+    pub reports: Vec<RunReport>,
+}
+
+/// The result of the TR-NEWS procedure.
+#[derive(Clone, Debug)]
+pub struct TrNews {
+    /// The parameters used.
+    pub spec: TrNewsSpec,
+    /// The transmitted chirp c(t) (Pa).
+    pub chirp: Signal,
+    /// First-pass responses y at every receiver.
+    pub responses: Vec<Signal>,
+    /// Focusing per requested receiver.
+    pub focus: Vec<Focus>,
+    /// Report of the chirp run (None when convolved).
+    pub chirp_report: Option<RunReport>,
+}
+
+impl TrNewsSpec {
+    fn focus_duration_s(&self) -> f64 {
+        self.window_s + self.after_focus_s
+    }
+}
+
+/// Runs TR-NEWS: chirp -> y -> Gamma = xcorr(y, c) -> Gamma(T - t) -> y_TR (eqs 6-9).
+pub fn tr_news(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
+    let peak_pa = responder.scene.spec.transmitter.peak_pa;
+    let chirp = signal::chirp(
+        spec.f0_hz,
+        spec.f1_hz,
+        spec.chirp_s,
+        spec.signal_s,
+        responder.dt_s,
+        peak_pa,
+        spec.taper,
+    )?;
+    let first = responder.respond(&chirp, spec.record_s)?;
+    let n_receivers = first.traces.len();
+    let receivers: Vec<usize> = if spec.receivers.is_empty() {
+        (1..=n_receivers).collect()
+    } else {
+        spec.receivers.clone()
+    };
+    if let Some(&bad) = receivers.iter().find(|&&r| r == 0 || r > n_receivers) {
+        return Err(Error::invalid(
+            "tr_news.receivers",
+            bad,
+            format!("receivers are numbered 1..{n_receivers}"),
+        ));
+    }
+    let mut sources = Vec::with_capacity(receivers.len());
+    let mut gammas = Vec::with_capacity(receivers.len());
+    for &r in &receivers {
+        let gamma = signal::xcorr(&first.traces[r - 1], &chirp, 0.0, spec.window_s)?;
+        let reversed = signal::time_reverse_to_start(&gamma)?;
+        let max = reversed.max_abs();
+        if !(max > 0.0) {
+            return Err(Error::invalid(
+                "tr_news",
+                format!("receiver {r}"),
+                "recorded nothing: the correlation is zero",
+            ));
+        }
+        sources.push(reversed.scale(peak_pa / max)?);
+        gammas.push(gamma);
+    }
+    let mut transmissions = sources.clone();
+    if spec.pulse_inversion {
+        transmissions.extend(
+            sources
+                .iter()
+                .map(|s| s.scale(-1.0))
+                .collect::<std::result::Result<Vec<_>, _>>()?,
+        );
+    }
+    let responses = responder.respond_all(&transmissions, spec.focus_duration_s())?;
+    let focus = receivers
+        .iter()
+        .enumerate()
+        .map(|(k, &r)| {
+            let positive = &responses[k];
+            let negative = spec
+                .pulse_inversion
+                .then(|| &responses[k + receivers.len()]);
+            focus_at(
+                spec,
+                r,
+                gammas[k].clone(),
+                sources[k].clone(),
+                positive,
+                negative,
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(TrNews {
+        spec: spec.clone(),
+        chirp,
+        responses: first.traces,
+        focus,
+        chirp_report: first.report,
+    })
+}
+
+fn focus_at(
+    spec: &TrNewsSpec,
+    r: usize,
+    gamma: Signal,
+    source: Signal,
+    positive: &Response,
+    negative: Option<&Response>,
+) -> Result<Focus> {
+    let focused = positive.traces[r - 1].clone();
+    let peak = signal::peak(&focused)?;
+    let side_lobes = signal::side_lobes(&focused, spec.window_s, spec.main_lobe_half_width_s)?;
+    let inverted = negative.map(|n| n.traces[r - 1].clone());
+    let pi_sum = inverted.as_ref().map(|i| focused.add(i)).transpose()?;
+    let reports = positive
+        .report
+        .iter()
+        .chain(negative.and_then(|n| n.report.as_ref()))
+        .cloned()
+        .collect();
+    Ok(Focus {
+        receiver: r,
+        gamma,
+        source,
+        focused,
+        peak,
+        side_lobes,
+        inverted,
+        pi_sum,
+        reports,
+    })
+}
+
+/// Delayed TR-NEWS at one point (eqs 10-11): simulation of the composite source
+/// sum_i a_i s(t - tau_i) against the linear prediction sum_i a_i y_TR(t - tau_i).
+#[derive(Clone, Debug, Serialize)]
+pub struct Delayed {
+    /// Delays tau_i (s).
+    pub delays_s: Vec<f64>,
+    /// Amplitudes a_i.
+    pub amplitudes: Vec<f64>,
+    /// The linear prediction at the focusing receiver.
+    pub prediction: Signal,
+    /// The simulated (or, for a linear scene, convolved) response.
+    pub simulation: Signal,
+    /// Relative L2 misfit ||sim - pred|| / ||pred|| over the focus window.
+    pub misfit: f64,
+    /// (max |sim| - max |pred|) / max |pred| over the focus window.
+    pub peak_difference: f64,
+    /// The window [t0, t1] the misfit is measured over (s).
+    pub window_s: (f64, f64),
+    /// The run report (None when convolved).
+    pub report: Option<RunReport>,
+}
+
+/// Delayed TR-NEWS for several (delays, amplitudes) points, simulated in parallel.
+/// The misfit window spans the focus times window_s + tau_i, widened by `half_window_s`.
+pub fn delayed_tr_news(
+    responder: &Responder,
+    tr: &TrNews,
+    focus: &Focus,
+    points: &[(Vec<f64>, Vec<f64>)],
+    half_window_s: f64,
+) -> Result<Vec<Delayed>> {
+    let mut sources = Vec::with_capacity(points.len());
+    for (delays, amplitudes) in points {
+        if let Some(&bad) = delays.iter().find(|d| !(d.is_finite() && **d >= 0.0)) {
+            return Err(Error::invalid(
+                "delays_s",
+                bad,
+                "delays must be finite and >= 0",
+            ));
+        }
+        sources.push(signal::delay_and_sum(&focus.source, delays, amplitudes)?);
+    }
+    let max_delay = points
+        .iter()
+        .flat_map(|p| p.0.iter())
+        .fold(0.0f64, |m, d| m.max(*d));
+    let duration = tr.spec.focus_duration_s() + max_delay;
+    let responses = responder.respond_all(&sources, duration)?;
+    points
+        .iter()
+        .zip(responses)
+        .map(|((delays, amplitudes), response)| {
+            let simulation = response.traces[focus.receiver - 1].clone();
+            let prediction = truncate(
+                signal::delay_and_sum(&focus.focused, delays, amplitudes)?,
+                simulation.len(),
+            );
+            let last = delays.iter().fold(0.0f64, |m, d| m.max(*d));
+            let first = delays.iter().fold(f64::INFINITY, |m, d| m.min(*d));
+            let window = (
+                tr.spec.window_s + first - half_window_s,
+                (tr.spec.window_s + last + half_window_s).min(simulation.t_end_s()),
+            );
+            let misfit = signal::relative_l2(&simulation, &prediction, Some(window))?;
+            let peak_of =
+                |s: &Signal| -> Result<f64> { Ok(s.window(window.0, window.1)?.max_abs()) };
+            let p = peak_of(&prediction)?;
+            let peak_difference = (peak_of(&simulation)? - p) / p;
+            Ok(Delayed {
+                delays_s: delays.clone(),
+                amplitudes: amplitudes.clone(),
+                prediction,
+                simulation,
+                misfit,
+                peak_difference,
+                window_s: window,
+                report: response.report,
+            })
+        })
+        .collect()
+}
+
+/// Pulse inversion of any transmission: responses to +s and -s and their sum per receiver.
+#[derive(Clone, Debug)]
+pub struct PulseInversion {
+    /// Responses to +s.
+    pub positive: Vec<Signal>,
+    /// Responses to -s.
+    pub negative: Vec<Signal>,
+    /// positive + negative: zero (to round-off) for a linear scene.
+    pub sum: Vec<Signal>,
+    /// Reports of the two runs (empty when convolved).
+    pub reports: Vec<RunReport>,
+}
+
+/// Transmits +s and -s (in parallel) and sums the responses (report Sec. 5.3).
+pub fn pulse_inversion(
+    responder: &Responder,
+    s: &Signal,
+    duration_s: f64,
+) -> Result<PulseInversion> {
+    let pair = responder.respond_all(&[s.clone(), s.scale(-1.0)?], duration_s)?;
+    let sum = pair[0]
+        .traces
+        .iter()
+        .zip(&pair[1].traces)
+        .map(|(a, b)| a.add(b))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let reports = pair.iter().filter_map(|r| r.report.clone()).collect();
+    let mut it = pair.into_iter();
+    let (p, n) = (it.next().unwrap(), it.next().unwrap());
+    Ok(PulseInversion {
+        positive: p.traces,
+        negative: n.traces,
+        sum,
+        reports,
+    })
+}
