@@ -16,6 +16,7 @@ pub mod plot;
 pub mod scene;
 pub mod signal;
 pub mod solve;
+pub mod study;
 pub mod trnews;
 
 pub use error::{Error, Result};

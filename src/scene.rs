@@ -22,11 +22,40 @@ use serde::{Deserialize, Serialize};
 pub enum LaminateSpec {
     /// The stochastic CFRP laminate of Sec. 2.2.1.
     Stochastic(StochasticSpec),
-    /// Explicit layers from the top surface down, each a preset material name and a thickness.
+    /// Explicit layers from the top surface down.
     Layers {
-        /// (preset name, thickness in m), top first.
-        layers: Vec<(String, f64)>,
+        /// Layers, top first.
+        layers: Vec<LayerSpec>,
     },
+}
+
+/// A material by preset name (`epoxy`, `fabric_0_90`, `fabric_45_45`) or by its constants.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum MaterialSpec {
+    /// A preset name.
+    Preset(String),
+    /// Orthotropic engineering constants.
+    Custom(Orthotropic),
+}
+
+/// One explicit layer.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LayerSpec {
+    /// Its material.
+    pub material: MaterialSpec,
+    /// Thickness (m).
+    pub thickness_m: f64,
+}
+
+impl MaterialSpec {
+    fn constants(&self) -> Result<Orthotropic> {
+        match self {
+            MaterialSpec::Preset(name) => Orthotropic::preset(name),
+            MaterialSpec::Custom(o) => Ok(o.clone()),
+        }
+    }
 }
 
 impl Default for LaminateSpec {
@@ -199,21 +228,25 @@ fn build_laminate(spec: &LaminateSpec, plane: Plane) -> Result<Laminate> {
     match spec {
         LaminateSpec::Stochastic(s) => Laminate::stochastic(s, plane),
         LaminateSpec::Layers { layers } => {
-            let mut names: Vec<&str> = Vec::new();
+            let mut distinct: Vec<Orthotropic> = Vec::new();
             let mut stack = Vec::new();
-            for (name, thickness_m) in layers.iter().rev() {
-                let material = names.iter().position(|n| n == name).unwrap_or_else(|| {
-                    names.push(name);
-                    names.len() - 1
-                });
+            for layer in layers.iter().rev() {
+                let constants = layer.material.constants()?;
+                let material = distinct
+                    .iter()
+                    .position(|o| *o == constants)
+                    .unwrap_or_else(|| {
+                        distinct.push(constants);
+                        distinct.len() - 1
+                    });
                 stack.push(Layer {
                     material,
-                    thickness_m: *thickness_m,
+                    thickness_m: layer.thickness_m,
                 });
             }
-            let materials = names
+            let materials = distinct
                 .iter()
-                .map(|n| Orthotropic::preset(n)?.reduce(plane))
+                .map(|o| o.reduce(plane))
                 .collect::<Result<Vec<_>>>()?;
             Laminate::from_layers(materials, stack)
         }

@@ -6,25 +6,24 @@ use serde::Serialize;
 /// Two estimates of the explicit stability limit.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct StabilityEstimate {
-    /// 2 / sqrt(lambda), lambda from power iteration on M^-1 K (Rayleigh quotient). Power
-    /// iteration approaches omega_max from below, so this is slightly above the true limit;
+    /// 2 / sqrt(lambda), lambda the largest Ritz value of a Lanczos run on M^-1 K. It
+    /// approaches omega_max^2 from below, so this is at or slightly above the true limit;
     /// it is the number reported as dt_crit.
     pub dt_crit_s: f64,
     /// 2 / sqrt(max over elements of a Gershgorin bound of M_e^-1 K_e): a guaranteed lower
     /// bound of the true limit (element eigenvalue inequality).
     pub dt_element_bound_s: f64,
-    /// Power iterations taken.
+    /// Lanczos iterations taken.
     pub iterations: usize,
 }
 
-/// Largest power iterations.
-const MAX_ITERATIONS: usize = 2000;
-/// Relative change of the Rayleigh quotient over 20 iterations that counts as converged.
-const TOLERANCE: f64 = 1e-7;
+/// Lanczos iterations: the largest Ritz value converges to omega_max^2 much faster than
+/// power iteration (80 matrix products instead of thousands on a dense top spectrum).
+const LANCZOS_STEPS: usize = 80;
 
 /// Estimates the critical step of lumped-mass central difference for `model`.
 pub fn estimate(model: &Model) -> StabilityEstimate {
-    let (lambda, iterations) = power_iteration(model);
+    let (lambda, iterations) = lanczos_max_eigenvalue(model);
     StabilityEstimate {
         dt_crit_s: 2.0 / lambda.sqrt(),
         dt_element_bound_s: element_bound(model),
@@ -50,55 +49,123 @@ fn element_bound(model: &Model) -> f64 {
     2.0 / omega2.sqrt()
 }
 
-/// Power iteration on the symmetric A = M^-1/2 K M^-1/2 over the free DOFs; returns the
-/// Rayleigh quotient (an estimate of omega_max^2 from below) and the iterations used.
-fn power_iteration(model: &Model) -> (f64, usize) {
+/// Largest eigenvalue of the symmetric A = M^-1/2 K M^-1/2 over the free DOFs (fixed DOFs
+/// removed) by Lanczos: the largest Ritz value of the tridiagonal T_k, a lower bound of
+/// lambda_max that converges quickly. Returns it and the iterations used.
+fn lanczos_max_eigenvalue(model: &Model) -> (f64, usize) {
     let n = model.dofs();
     let inv_sqrt_m: Vec<f64> = model.lumped_mass.iter().map(|m| 1.0 / m.sqrt()).collect();
     let mut free = vec![true; n];
     for &d in &model.fixed_dofs {
         free[d] = false;
     }
-    // Deterministic start with components in every mode: a hashed +-1 pattern.
-    let mut x: Vec<f64> = (0..n)
-        .map(|i| {
-            if free[i] {
-                if (i.wrapping_mul(2654435761) >> 7) & 1 == 0 {
-                    1.0
-                } else {
-                    -1.0
-                }
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let (mut y, mut scaled) = (vec![0.0; n], vec![0.0; n]);
-    let mut history = [0.0f64; 20];
-    let mut lambda = 0.0;
-    for it in 0..MAX_ITERATIONS {
-        normalize(&mut x);
+    let apply = |x: &[f64], scaled: &mut [f64], y: &mut [f64]| {
         for i in 0..n {
             scaled[i] = x[i] * inv_sqrt_m[i];
         }
-        model.stiffness.mul(&scaled, &mut y);
+        model.stiffness.mul(scaled, y);
         for i in 0..n {
             y[i] = if free[i] { y[i] * inv_sqrt_m[i] } else { 0.0 };
         }
-        lambda = x.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>();
-        let old = history[it % 20];
-        history[it % 20] = lambda;
-        if it >= 20 && (lambda - old).abs() <= TOLERANCE * lambda {
-            return (lambda, it + 1);
+    };
+    // Deterministic start with components in every mode: a hashed +-1 pattern.
+    let sign = |i: usize| {
+        if (i.wrapping_mul(2654435761) >> 7) & 1 == 0 {
+            1.0
+        } else {
+            -1.0
         }
-        std::mem::swap(&mut x, &mut y);
+    };
+    let mut q: Vec<f64> = (0..n)
+        .map(|i| if free[i] { sign(i) } else { 0.0 })
+        .collect();
+    normalize(&mut q);
+    let (mut q_prev, mut w, mut scaled) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let (mut alpha, mut beta) = (
+        Vec::with_capacity(LANCZOS_STEPS),
+        Vec::with_capacity(LANCZOS_STEPS),
+    );
+    let mut b_prev = 0.0;
+    for _ in 0..LANCZOS_STEPS.min(n) {
+        apply(&q, &mut scaled, &mut w);
+        let a = dot(&w, &q);
+        for i in 0..n {
+            w[i] -= a * q[i] + b_prev * q_prev[i];
+        }
+        alpha.push(a);
+        let b = dot(&w, &w).sqrt();
+        if b <= 1e-12 * a.abs() {
+            break;
+        }
+        beta.push(b);
+        for i in 0..n {
+            q_prev[i] = q[i];
+            q[i] = w[i] / b;
+        }
+        b_prev = b;
     }
-    (lambda, MAX_ITERATIONS)
+    beta.truncate(alpha.len().saturating_sub(1));
+    (tridiagonal_max_eigenvalue(&alpha, &beta), alpha.len())
+}
+
+/// Number of eigenvalues below x of the symmetric tridiagonal (diagonal a, off-diagonal b),
+/// from the signs of the Sturm sequence q_i = a_i - x - b_{i-1}^2 / q_{i-1}.
+fn count_below(a: &[f64], b: &[f64], x: f64) -> usize {
+    let mut count = 0;
+    let mut q = 1.0;
+    for i in 0..a.len() {
+        let coupling = if i > 0 { b[i - 1] * b[i - 1] / q } else { 0.0 };
+        q = a[i] - x - coupling;
+        if q == 0.0 {
+            q = f64::MIN_POSITIVE;
+        }
+        count += (q < 0.0) as usize;
+    }
+    count
+}
+
+/// Largest eigenvalue of a symmetric tridiagonal by bisection between Gershgorin bounds.
+fn tridiagonal_max_eigenvalue(a: &[f64], b: &[f64]) -> f64 {
+    let radius =
+        |i: usize| (if i > 0 { b[i - 1].abs() } else { 0.0 }) + b.get(i).map_or(0.0, |v| v.abs());
+    let mut lo = (0..a.len())
+        .map(|i| a[i] - radius(i))
+        .fold(f64::INFINITY, f64::min);
+    let mut hi = (0..a.len())
+        .map(|i| a[i] + radius(i))
+        .fold(f64::NEG_INFINITY, f64::max);
+    while hi - lo > 1e-14 * hi.abs() {
+        let mid = 0.5 * (lo + hi);
+        if count_below(a, b, mid) == a.len() {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn normalize(x: &mut [f64]) {
-    let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let norm = dot(x, x).sqrt();
     if norm > 0.0 {
         x.iter_mut().for_each(|v| *v /= norm);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tridiagonal_eigenvalue_matches_closed_form() {
+        // tridiag(-1, 2, -1) of size n has eigenvalues 2 - 2 cos(k pi / (n + 1)).
+        let n = 50;
+        let max = tridiagonal_max_eigenvalue(&vec![2.0; n], &vec![-1.0; n - 1]);
+        let exact = 2.0 - 2.0 * (n as f64 * std::f64::consts::PI / (n as f64 + 1.0)).cos();
+        assert!((max - exact).abs() < 1e-12, "{max} vs {exact}");
     }
 }
