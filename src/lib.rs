@@ -8,6 +8,7 @@
 pub mod contact;
 pub mod error;
 pub mod fem;
+pub mod figures;
 pub mod io;
 pub mod laminate;
 pub mod material;

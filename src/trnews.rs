@@ -13,6 +13,7 @@ use crate::signal::{self, Peak, SideLobes, Signal};
 use crate::solve::RunReport;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// Recorded responses of every receiver to one transmission.
 #[derive(Clone, Debug)]
@@ -23,41 +24,48 @@ pub struct Response {
     pub report: Option<RunReport>,
 }
 
-/// Answers "what do the receivers record when the transmitter sends s?".
-pub struct Responder<'a> {
-    scene: &'a Scene,
+/// Answers "what do the receivers record when the transmitter sends s?". Cheap to clone.
+#[derive(Clone, Debug)]
+pub struct Responder {
+    scene: Arc<Scene>,
     dt_s: f64,
     /// Response to a unit impulse, per receiver, when the scene is linear.
-    impulse: Option<Response>,
+    impulse: Option<Arc<Response>>,
 }
 
-impl<'a> Responder<'a> {
+impl Responder {
     /// Simulates every transmission (any scene).
-    pub fn simulating(scene: &'a Scene) -> Responder<'a> {
+    pub fn simulating(scene: Arc<Scene>) -> Responder {
+        let dt_s = scene.default_dt_s();
         Responder {
             scene,
-            dt_s: scene.default_dt_s(),
+            dt_s,
             impulse: None,
         }
     }
 
     /// For a linear scene, runs the impulse response once (over `duration_s`) and convolves
     /// afterwards; for a nonlinear scene, the same as [`Responder::simulating`].
-    pub fn new(scene: &'a Scene, duration_s: f64) -> Result<Responder<'a>> {
+    pub fn new(scene: Arc<Scene>, duration_s: f64) -> Result<Responder> {
         let mut r = Self::simulating(scene);
-        if scene.is_linear() {
+        if r.scene.is_linear() {
             let unit = Signal {
                 dt_s: r.dt_s,
                 t0_s: 0.0,
                 samples: vec![1.0],
             };
-            let out = scene.transmit(&unit, &r.run_config(duration_s))?;
-            r.impulse = Some(Response {
+            let out = r.scene.transmit(&unit, &r.run_config(duration_s))?;
+            r.impulse = Some(Arc::new(Response {
                 traces: out.traces,
                 report: Some(out.report),
-            });
+            }));
         }
         Ok(r)
+    }
+
+    /// The scene it answers for.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
     }
 
     /// The solver step of every response (s).

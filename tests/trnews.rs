@@ -1,5 +1,6 @@
 //! TR-NEWS, delayed TR-NEWS and pulse inversion on a small cracked / uncracked laminate.
 
+use std::sync::Arc;
 use trnews::laminate::StochasticSpec;
 use trnews::scene::{CrackSpec, LaminateSpec, ReceiverSpec, Scene, SceneSpec, TransmitterSpec};
 use trnews::signal::{self, Signal};
@@ -7,7 +8,7 @@ use trnews::trnews::{delayed_tr_news, pulse_inversion, tr_news, Responder, TrNew
 
 /// A 6 mm wide, 10-pair laminate (~2.4 mm), receivers 1..4 on top, the transmitter on the
 /// right edge, a 1.2 mm crack 0.8 mm deep under the middle.
-fn small(cracked: bool) -> Scene {
+fn small(cracked: bool) -> Arc<Scene> {
     let spec = SceneSpec {
         laminate: LaminateSpec::Stochastic(StochasticSpec {
             pairs: 10,
@@ -33,7 +34,7 @@ fn small(cracked: bool) -> Scene {
         }),
         ..Default::default()
     };
-    Scene::build(&spec).unwrap()
+    Arc::new(Scene::build(&spec).unwrap())
 }
 
 fn spec() -> TrNewsSpec {
@@ -61,8 +62,8 @@ fn impulse_response_convolution_equals_direct_simulation() {
     // A linear scene is LTI in discrete time: convolution with the impulse response is
     // exact up to floating-point round-off (1e-10 relative, issue).
     let scene = small(false);
-    let convolving = Responder::new(&scene, 25e-6).unwrap();
-    let simulating = Responder::simulating(&scene);
+    let convolving = Responder::new(scene.clone(), 25e-6).unwrap();
+    let simulating = Responder::simulating(scene.clone());
     let chirp = signal::chirp(0.2e6, 2e6, 10e-6, 15e-6, convolving.dt_s(), 50e3, 0.0).unwrap();
     let a = convolving.respond(&chirp, 20e-6).unwrap();
     let b = simulating.respond(&chirp, 20e-6).unwrap();
@@ -75,7 +76,7 @@ fn impulse_response_convolution_equals_direct_simulation() {
 #[test]
 fn uncracked_focuses_symmetrically_and_delayed_prediction_is_exact() {
     let scene = small(false);
-    let responder = Responder::simulating(&scene);
+    let responder = Responder::simulating(scene.clone());
     let tr = tr_news(&responder, &spec()).unwrap();
     let f = &tr.focus[0];
     // Focus at the end of the lag window, within a tenth of the chirp's shortest period.
@@ -111,7 +112,7 @@ fn uncracked_focuses_symmetrically_and_delayed_prediction_is_exact() {
 fn cracked_scene_breaks_linearity_clearly() {
     let dt_points = |dt: f64| vec![(vec![0.0, 300.0 * dt], vec![1.0, 1.0])];
     let scene = small(false);
-    let linear = Responder::simulating(&scene);
+    let linear = Responder::simulating(scene.clone());
     let tr = tr_news(&linear, &spec()).unwrap();
     let misfit_linear =
         delayed_tr_news(&linear, &tr, &tr.focus[0], &dt_points(linear.dt_s()), 3e-6).unwrap()[0]
@@ -119,7 +120,7 @@ fn cracked_scene_breaks_linearity_clearly() {
     let pi_linear = tr.focus[0].pi_sum.as_ref().unwrap().max_abs() / tr.focus[0].focused.max_abs();
 
     let cracked = small(true);
-    let responder = Responder::new(&cracked, 0.0).unwrap();
+    let responder = Responder::new(cracked.clone(), 0.0).unwrap();
     let tr = tr_news(&responder, &spec()).unwrap();
     let f = &tr.focus[0];
     let misfit =
@@ -152,13 +153,13 @@ fn pulse_inversion_cancels_only_without_a_closing_crack() {
     let chirp_for =
         |r: &Responder| signal::chirp(0.2e6, 2e6, 10e-6, 15e-6, r.dt_s(), 50e3, 0.0).unwrap();
     let scene = small(false);
-    let r = Responder::simulating(&scene);
+    let r = Responder::simulating(scene.clone());
     let pi = pulse_inversion(&r, &chirp_for(&r), 15e-6).unwrap();
     let residual =
         |p: &trnews::trnews::PulseInversion| p.sum[2].max_abs() / p.positive[2].max_abs();
     assert!(residual(&pi) < 1e-12, "{:e}", residual(&pi));
     let cracked = small(true);
-    let r = Responder::simulating(&cracked);
+    let r = Responder::simulating(cracked.clone());
     let pi = pulse_inversion(&r, &chirp_for(&r), 15e-6).unwrap();
     println!(
         "PI residual of the chirp at receiver 3 with the crack: {:e}",
