@@ -13,6 +13,7 @@ pub mod laminate;
 pub mod material;
 pub mod mesh;
 pub mod plot;
+pub mod script;
 pub mod signal;
 pub mod solve;
 
