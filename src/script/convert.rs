@@ -13,8 +13,12 @@ pub type ScriptResult<T> = Result<T, Box<EvalAltResult>>;
 /// A runtime error at the script position of the current call, prefixed with the
 /// function's name (namespaced calls would otherwise lose the position).
 pub fn error(ctx: &NativeCallContext, message: impl std::fmt::Display) -> Box<EvalAltResult> {
-    let text = format!("{}: {message}", ctx.fn_name());
-    EvalAltResult::ErrorRuntime(text.into(), ctx.call_position()).into()
+    failure(ctx, format!("{}: {message}", ctx.fn_name()))
+}
+
+/// A runtime error at the script position of the current call, message as given.
+pub fn failure(ctx: &NativeCallContext, message: String) -> Box<EvalAltResult> {
+    EvalAltResult::ErrorRuntime(message.into(), ctx.call_position()).into()
 }
 
 /// Raises a library error (anything displayable) at the position of the call.

@@ -467,9 +467,69 @@ fn api_function(module: &str, f: &serde_json::Value) -> ApiFunction {
         .collect();
     ApiFunction {
         module: module.to_string(),
-        signature: f["signature"].as_str().unwrap_or_default().to_string(),
+        signature: signature(module, f),
         description: first_paragraph(&docs),
     }
+}
+
+/// A script-facing signature: `module::name(p: type, ...) -> type` for namespaced functions,
+/// `name(...)` for global ones (callable bare or as methods), `Type.prop -> type` for getters.
+fn signature(module: &str, f: &serde_json::Value) -> String {
+    let name = f["name"].as_str().unwrap_or_default();
+    let params: Vec<(String, String)> = f["params"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|p| {
+            let n = p["name"].as_str().unwrap_or("_").to_string();
+            (n, script_type(p["type"].as_str().unwrap_or("?")))
+        })
+        .collect();
+    let ret = script_type(f["returnType"].as_str().unwrap_or_default());
+    let arrow = if ret.is_empty() {
+        String::new()
+    } else {
+        format!(" -> {ret}")
+    };
+    if let (Some(prop), Some((_, owner))) = (name.strip_prefix("get$"), params.first()) {
+        return format!("{owner}.{prop}{arrow}");
+    }
+    let list: Vec<String> = params.iter().map(|(n, t)| format!("{n}: {t}")).collect();
+    let prefix = if f["namespace"] == "global" {
+        String::new()
+    } else {
+        format!("{module}::")
+    };
+    format!("{prefix}{name}({}){arrow}", list.join(", "))
+}
+
+/// A Rust parameter or return type as scripts see it (`&mut Signal` -> `Signal`,
+/// `Res<f64>` -> `float`, `()` -> empty).
+fn script_type(rust: &str) -> String {
+    let t: String = rust.chars().filter(|c| !c.is_whitespace()).collect();
+    let t = t
+        .trim_start_matches("rhai::")
+        .trim_start_matches("&mut")
+        .trim_start_matches('&');
+    let t = t
+        .strip_prefix("Res<")
+        .and_then(|x| x.strip_suffix('>'))
+        .unwrap_or(t);
+    let t = t
+        .strip_prefix("Result<")
+        .and_then(|x| x.split_once(','))
+        .map_or(t, |(ok, _)| ok);
+    match t {
+        "()" => "",
+        "f64" | "FLOAT" => "float",
+        "i64" | "INT" => "int",
+        "str" | "String" | "ImmutableString" => "string",
+        "Dynamic" => "any",
+        "Map" => "map",
+        "Array" => "array",
+        other => other,
+    }
+    .to_string()
 }
 
 /// The first paragraph of doc comment lines, without `///` markers, joined on one line.
@@ -530,6 +590,18 @@ mod tests {
         for bad in ["", "2x", "a-b", "a b"] {
             assert!(check_param_name(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn rust_types_read_as_script_types() {
+        assert_eq!(script_type("&mut Signal"), "Signal");
+        assert_eq!(script_type("Res<()>"), "");
+        assert_eq!(
+            script_type("Result<String, Box<rhai::EvalAltResult>>"),
+            "string"
+        );
+        assert_eq!(script_type("f64"), "float");
+        assert_eq!(script_type("&str"), "string");
     }
 
     #[test]

@@ -166,6 +166,12 @@ mod signal_api {
         s.len() as INT
     }
 
+    /// Number of samples (method form of the `len` property).
+    #[rhai_fn(global, name = "len", pure)]
+    pub fn len_method(s: &mut Signal) -> INT {
+        s.len() as INT
+    }
+
     /// Duration n dt (s).
     #[rhai_fn(global, get = "duration", pure)]
     pub fn duration(s: &mut Signal) -> FLOAT {

@@ -11,7 +11,7 @@ pub fn module() -> Module {
 
 #[export_module]
 mod test_api {
-    use crate::script::convert::{error, number};
+    use crate::script::convert::{error, failure, number};
     use rhai::{Dynamic, NativeCallContext};
 
     /// Fails with `message` unless `condition` is true.
@@ -24,7 +24,7 @@ mod test_api {
         if condition {
             Ok(())
         } else {
-            Err(error(&ctx, format!("failed: {message}")))
+            Err(failure(&ctx, format!("assert failed: {message}")))
         }
     }
 
@@ -54,10 +54,10 @@ mod test_api {
         if (actual - expected).abs() <= rel_tol * expected.abs() {
             Ok(())
         } else {
-            Err(error(
+            Err(failure(
                 &ctx,
                 format!(
-                    "failed: actual {actual} vs expected {expected} (rel tol {rel_tol}): {message}"
+                    "assert_close failed: actual {actual} vs expected {expected} (rel tol {rel_tol}): {message}"
                 ),
             ))
         }
