@@ -15,6 +15,7 @@ pub mod material;
 pub mod mesh;
 pub mod plot;
 pub mod scene;
+pub mod script;
 pub mod signal;
 pub mod solve;
 pub mod study;

@@ -1,1 +1,107 @@
-fn main() {}
+//! `trnews-script`: runs a Rhai experiment script against the trnews library.
+
+use clap::Parser;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+use trnews::script::{parse_param_value, Host, HostOptions, ScriptError, DEFAULT_MAX_OPERATIONS};
+
+/// Run a trnews experiment script (Rhai): simulations, TR-NEWS processing, figures and data files.
+#[derive(Debug, Parser)]
+#[command(version, about)]
+struct Cli {
+    /// The script to run, e.g. scripts/sweep_delays.rhai.
+    script: PathBuf,
+    /// Directory that every output path of the script is resolved under.
+    #[arg(long, default_value = ".")]
+    out: PathBuf,
+    /// Script parameter NAME=VALUE (int, float, bool or string), read with param("NAME", default).
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
+    set: Vec<(String, String)>,
+    /// Number of worker threads for parallel numerics (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Hide progress display (script print output is still shown).
+    #[arg(long)]
+    quiet: bool,
+    /// Operation budget of the script; exceeding it stops the run with an error.
+    #[arg(long, default_value_t = DEFAULT_MAX_OPERATIONS)]
+    max_operations: u64,
+    /// Only compile the script and report syntax errors.
+    #[arg(long)]
+    check: bool,
+    /// List every function the scripting API offers, with descriptions, and exit.
+    #[arg(long)]
+    api: bool,
+}
+
+/// Splits `NAME=VALUE`.
+fn parse_set(text: &str) -> Result<(String, String), String> {
+    text.split_once('=')
+        .map(|(n, v)| (n.trim().to_string(), v.to_string()))
+        .ok_or_else(|| format!("'{text}' is not NAME=VALUE"))
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(&cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: &Cli) -> Result<(), ScriptError> {
+    if let Some(n) = cli.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| ScriptError::new("--threads", e.to_string()))?;
+    }
+    let host = Host::new(HostOptions {
+        out_dir: cli.out.clone(),
+        params: cli
+            .set
+            .iter()
+            .map(|(n, v)| (n.clone(), parse_param_value(v)))
+            .collect(),
+        max_operations: cli.max_operations,
+        quiet: cli.quiet,
+    })?;
+    if cli.api {
+        print_api(&host);
+        return Ok(());
+    }
+    if cli.check {
+        host.check_file(&cli.script)?;
+        if !cli.quiet {
+            eprintln!("{}: ok", cli.script.display());
+        }
+        return Ok(());
+    }
+    let start = Instant::now();
+    host.run_file(&cli.script)?;
+    if !cli.quiet {
+        eprintln!(
+            "{}: done in {:.2} s (outputs under {})",
+            cli.script.display(),
+            start.elapsed().as_secs_f64(),
+            cli.out.display()
+        );
+    }
+    Ok(())
+}
+
+/// Prints the API grouped by module: signature, then its description indented.
+fn print_api(host: &Host) {
+    let mut module = String::new();
+    for f in host.api() {
+        if f.module != module {
+            println!("\n[{}]", f.module);
+            module = f.module.clone();
+        }
+        println!("  {}\n      {}", f.signature, f.description);
+    }
+}

@@ -1,0 +1,144 @@
+//! Argument conversion shared by the bindings: numbers and arrays from `Dynamic`, option
+//! maps into serde structs with errors naming the field, and library errors raised at the
+//! script position of the call.
+
+use crate::signal::Signal;
+use rhai::{Array, Dynamic, EvalAltResult, Map, NativeCallContext};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+
+/// Result of a native function as Rhai expects it.
+pub type ScriptResult<T> = Result<T, Box<EvalAltResult>>;
+
+/// A runtime error at the script position of the current call, prefixed with the
+/// function's name (namespaced calls would otherwise lose the position).
+pub fn error(ctx: &NativeCallContext, message: impl std::fmt::Display) -> Box<EvalAltResult> {
+    failure(ctx, format!("{}: {message}", ctx.fn_name()))
+}
+
+/// A runtime error at the script position of the current call, message as given.
+pub fn failure(ctx: &NativeCallContext, message: String) -> Box<EvalAltResult> {
+    EvalAltResult::ErrorRuntime(message.into(), ctx.call_position()).into()
+}
+
+/// Raises a library error (anything displayable) at the position of the call.
+pub trait WithPosition<T> {
+    /// Converts the error into a Rhai error at `ctx`'s call position.
+    fn at(self, ctx: &NativeCallContext) -> ScriptResult<T>;
+}
+
+impl<T, E: std::fmt::Display> WithPosition<T> for Result<T, E> {
+    fn at(self, ctx: &NativeCallContext) -> ScriptResult<T> {
+        self.map_err(|e| error(ctx, e))
+    }
+}
+
+/// A number from an integer or float.
+pub fn number(value: &Dynamic) -> Option<f64> {
+    value
+        .as_float()
+        .ok()
+        .or_else(|| value.as_int().ok().map(|i| i as f64))
+}
+
+/// Floats from a Rhai array of numbers or a `Signal` (its samples); `what` names the argument.
+pub fn floats(ctx: &NativeCallContext, value: &Dynamic, what: &str) -> ScriptResult<Vec<f64>> {
+    if let Some(s) = value.read_lock::<Signal>() {
+        return Ok(s.samples.clone());
+    }
+    let Some(array) = value.read_lock::<Array>() else {
+        return Err(error(
+            ctx,
+            format!(
+                "{what} must be an array of numbers or a Signal, got {}",
+                value.type_name()
+            ),
+        ));
+    };
+    array
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            number(v).ok_or_else(|| {
+                error(
+                    ctx,
+                    format!("{what}[{i}] must be a number, got {}", v.type_name()),
+                )
+            })
+        })
+        .collect()
+}
+
+/// Rows of floats from an array of arrays (or of Signals).
+pub fn rows(ctx: &NativeCallContext, value: &Array, what: &str) -> ScriptResult<Vec<Vec<f64>>> {
+    value
+        .iter()
+        .enumerate()
+        .map(|(i, row)| floats(ctx, row, &format!("{what}[{i}]")))
+        .collect()
+}
+
+/// Strings from an array of strings.
+pub fn strings(ctx: &NativeCallContext, value: &Array, what: &str) -> ScriptResult<Vec<String>> {
+    value
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            v.clone()
+                .into_string()
+                .map_err(|t| error(ctx, format!("{what}[{i}] must be a string, got {t}")))
+        })
+        .collect()
+}
+
+/// Converts a script value to JSON (integers stay integers, floats stay floats).
+pub fn to_json(ctx: &NativeCallContext, value: &Dynamic) -> ScriptResult<serde_json::Value> {
+    serde_json::to_value(value).at(ctx)
+}
+
+/// Converts a serialisable library value to a script value (structs become object maps).
+pub fn to_dynamic<T: Serialize>(ctx: &NativeCallContext, value: &T) -> ScriptResult<Dynamic> {
+    rhai::serde::to_dynamic(value).map_err(|e| error(ctx, e))
+}
+
+/// Deserialises an option map into `T`. Integers are accepted where floats are expected.
+/// An unknown field is named by serde; a mistyped one is found by trying each field
+/// alone over `base` (a valid value of `T`), so the message names it and its value.
+pub fn options<T>(ctx: &NativeCallContext, map: Map, base: &T, what: &str) -> ScriptResult<T>
+where
+    T: DeserializeOwned + Serialize,
+{
+    let value = to_json(ctx, &Dynamic::from_map(map))?;
+    serde_json::from_value::<T>(value.clone()).or_else(|e| {
+        let message = match bad_field(&value, base) {
+            Some((field, v, why)) => format!("{what}.{field} = {v}: {why}"),
+            None => format!("{what}: {e}"),
+        };
+        Err(error(ctx, message))
+    })
+}
+
+/// The first field of `value` that fails to deserialise when put alone over `base`.
+fn bad_field<T>(value: &serde_json::Value, base: &T) -> Option<(String, String, String)>
+where
+    T: DeserializeOwned + Serialize,
+{
+    let base = serde_json::to_value(base).ok()?;
+    value.as_object()?.iter().find_map(|(k, v)| {
+        let mut probe = base.clone();
+        probe.as_object_mut()?.insert(k.clone(), v.clone());
+        serde_json::from_value::<T>(probe)
+            .err()
+            .map(|e| (k.clone(), v.to_string(), e.to_string()))
+    })
+}
+
+/// A string-keyed option parsed by serde from its text (e.g. a snake_case enum name).
+pub fn named<T: DeserializeOwned>(
+    ctx: &NativeCallContext,
+    text: &str,
+    what: &str,
+) -> ScriptResult<T> {
+    serde_json::from_value(serde_json::Value::String(text.to_string()))
+        .map_err(|e| error(ctx, format!("{what} '{text}': {e}")))
+}

@@ -1,0 +1,612 @@
+//! The Rhai scripting host: a sandboxed [`rhai::Engine`] with one static module per library
+//! domain, and the rendering of every script error as `file:line:column: message`.
+//!
+//! Bindings are thin: each function in `src/script/<module>.rs` converts its arguments,
+//! calls the library and converts the result back. To bind a new library module, add a file
+//! with an `#[export_module]` and a `pub fn module() -> Module`, then one line in
+//! [`MODULES`]. Host state a binding needs (output directory, `--set` parameters, progress
+//! display) is reached through [`HostContext::of`].
+//!
+//! Rhai names exposed here: `signal`, `plot`, `io`, `material`, `laminate`, `test`, `host`.
+
+mod convert;
+mod host;
+mod io;
+mod laminate;
+mod material;
+mod plot;
+mod signal;
+mod test;
+
+pub use convert::{ScriptResult, WithPosition};
+
+use rhai::module_resolvers::DummyModuleResolver;
+use rhai::{Dynamic, Engine, EvalAltResult, Module, ParseError, Position, Scope, AST};
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Component, Path, PathBuf};
+use std::sync::{Arc, RwLock};
+use std::time::Duration;
+
+/// Every Rhai module of the host: its name in scripts and its builder.
+/// Adding a binding (e.g. `scene`) is one entry here plus its file.
+const MODULES: &[(&str, fn() -> Module)] = &[
+    ("signal", signal::module),
+    ("plot", plot::module),
+    ("io", io::module),
+    ("material", material::module),
+    ("laminate", laminate::module),
+    ("test", test::module),
+    ("host", host::module),
+];
+
+/// Default operation budget of a script run (`--max-operations`).
+pub const DEFAULT_MAX_OPERATIONS: u64 = 1_000_000_000;
+/// Deepest script function call nesting allowed.
+pub const MAX_CALL_LEVELS: usize = 64;
+/// Largest string a script may build (bytes).
+pub const MAX_STRING_SIZE: usize = 1 << 24;
+/// Largest Rhai array a script may build (large data belongs in a `Signal`).
+pub const MAX_ARRAY_SIZE: usize = 1 << 24;
+/// Largest object map a script may build.
+pub const MAX_MAP_SIZE: usize = 1 << 16;
+
+/// How a [`Host`] is set up.
+#[derive(Clone, Debug)]
+pub struct HostOptions {
+    /// Directory every output path is resolved under (created if missing).
+    pub out_dir: PathBuf,
+    /// `--set NAME=VALUE` parameters: readable with `param(name, default)` and as constants.
+    pub params: BTreeMap<String, Dynamic>,
+    /// Operation budget; a script exceeding it stops with an error naming the limit.
+    pub max_operations: u64,
+    /// Hide progress display (script `print` output is still shown).
+    pub quiet: bool,
+}
+
+impl Default for HostOptions {
+    fn default() -> Self {
+        HostOptions {
+            out_dir: PathBuf::from("."),
+            params: BTreeMap::new(),
+            max_operations: DEFAULT_MAX_OPERATIONS,
+            quiet: false,
+        }
+    }
+}
+
+/// A script failure, rendered once at the edge as `file:line:column: message`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ScriptError {
+    /// The script as named on the command line (or the host's name for it).
+    pub file: String,
+    /// 1-based line and column of the failing expression, when known.
+    pub position: Option<(usize, usize)>,
+    /// One-line description of the cause.
+    pub message: String,
+}
+
+impl fmt::Display for ScriptError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.position {
+            Some((line, col)) => write!(f, "{}:{line}:{col}: {}", self.file, self.message),
+            None => write!(f, "{}: {}", self.file, self.message),
+        }
+    }
+}
+
+impl std::error::Error for ScriptError {}
+
+impl ScriptError {
+    /// An error without a position (unreadable file, bad host option).
+    pub fn new(file: impl Into<String>, message: impl Into<String>) -> Self {
+        ScriptError {
+            file: file.into(),
+            position: None,
+            message: one_line(&message.into()),
+        }
+    }
+
+    fn at(file: &str, pos: Position, message: &str) -> Self {
+        ScriptError {
+            position: pos.line().map(|l| (l, pos.position().unwrap_or(1))),
+            ..ScriptError::new(file, message)
+        }
+    }
+}
+
+/// Joins the lines of a message so that every error prints on one line.
+fn one_line(message: &str) -> String {
+    message.trim().lines().collect::<Vec<_>>().join("; ")
+}
+
+/// Host state shared with native functions through the engine's tag.
+#[derive(Debug)]
+pub struct HostContext {
+    out_dir: PathBuf,
+    params: BTreeMap<String, Dynamic>,
+    quiet: bool,
+    script: RwLock<String>,
+    progress: RwLock<Option<indicatif::ProgressBar>>,
+}
+
+impl HostContext {
+    /// The context of the host running the current call.
+    pub fn of(ctx: &rhai::NativeCallContext) -> ScriptResult<Arc<HostContext>> {
+        ctx.tag()
+            .and_then(|t| t.read_lock::<Arc<HostContext>>().map(|c| Arc::clone(&c)))
+            .ok_or_else(|| convert::error(ctx, "no host context: engine not built by Host"))
+    }
+
+    /// The output directory every written file lies under.
+    pub fn out_dir(&self) -> &Path {
+        &self.out_dir
+    }
+
+    /// The `--set` value of parameter `name`, if given.
+    pub fn param(&self, name: &str) -> Option<&Dynamic> {
+        self.params.get(name)
+    }
+
+    /// True when progress display is off (`--quiet`).
+    pub fn quiet(&self) -> bool {
+        self.quiet
+    }
+
+    /// Resolves a script-given output path under the output directory and creates its
+    /// parent directories. Absolute paths and `..` components are rejected, naming the path.
+    pub fn resolve_output(&self, path: &str) -> Result<PathBuf, String> {
+        let rel = Path::new(path);
+        if path.is_empty() {
+            return Err("output path is empty".into());
+        }
+        if rel.has_root() || rel.is_absolute() {
+            return Err(format!(
+                "output path '{path}' is absolute; give a path relative to the output directory {}",
+                self.out_dir.display()
+            ));
+        }
+        if rel
+            .components()
+            .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
+        {
+            return Err(format!(
+                "output path '{path}' leaves the output directory ('..' is not allowed)"
+            ));
+        }
+        let full = self.out_dir.join(rel);
+        if let Some(parent) = full.parent() {
+            std::fs::create_dir_all(parent)
+                .map_err(|e| format!("cannot create directory {}: {e}", parent.display()))?;
+        }
+        Ok(full)
+    }
+
+    /// Prints a script message to stderr, prefixed with the script name, without
+    /// tearing an active progress display.
+    pub fn print(&self, text: &str) {
+        let line = format!(
+            "[{}] {text}",
+            self.script.read().map(|s| s.clone()).unwrap_or_default()
+        );
+        match self
+            .progress
+            .read()
+            .ok()
+            .as_deref()
+            .and_then(Option::as_ref)
+        {
+            Some(bar) => bar.suspend(|| eprintln!("{line}")),
+            None => eprintln!("{line}"),
+        }
+    }
+
+    /// Starts the spinner shown while a script runs (unless quiet).
+    fn start(&self, script: &str) {
+        if let Ok(mut s) = self.script.write() {
+            *s = script.to_string();
+        }
+        if self.quiet {
+            return;
+        }
+        let bar = indicatif::ProgressBar::new_spinner().with_message(format!("running {script}"));
+        bar.enable_steady_tick(Duration::from_millis(200));
+        if let Ok(mut p) = self.progress.write() {
+            *p = Some(bar);
+        }
+    }
+
+    /// Removes the spinner.
+    fn finish(&self) {
+        if let Some(bar) = self.progress.write().ok().and_then(|mut p| p.take()) {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+/// The scripting host: a sandboxed engine with the trnews modules registered.
+pub struct Host {
+    engine: Engine,
+    context: Arc<HostContext>,
+    max_operations: u64,
+}
+
+impl Host {
+    /// Builds the engine, its sandbox limits and modules; creates the output directory.
+    pub fn new(options: HostOptions) -> Result<Host, ScriptError> {
+        for name in options.params.keys() {
+            check_param_name(name).map_err(|m| ScriptError::new("--set", m))?;
+        }
+        std::fs::create_dir_all(&options.out_dir).map_err(|e| {
+            ScriptError::new(
+                options.out_dir.display().to_string(),
+                format!("cannot create output directory: {e}"),
+            )
+        })?;
+        let context = Arc::new(HostContext {
+            out_dir: options.out_dir,
+            params: options.params,
+            quiet: options.quiet,
+            script: RwLock::new(String::new()),
+            progress: RwLock::new(None),
+        });
+        let engine = build_engine(&context, options.max_operations);
+        Ok(Host {
+            engine,
+            context,
+            max_operations: options.max_operations,
+        })
+    }
+
+    /// The underlying engine (for metadata, or to register extra modules in tests).
+    pub fn engine(&self) -> &Engine {
+        &self.engine
+    }
+
+    /// Compiles the script at `path` without running it.
+    pub fn check_file(&self, path: &Path) -> Result<(), ScriptError> {
+        let (name, text) = read_script(path)?;
+        self.compile(&name, &text).map(|_| ())
+    }
+
+    /// Compiles and runs the script at `path`.
+    pub fn run_file(&self, path: &Path) -> Result<(), ScriptError> {
+        let (name, text) = read_script(path)?;
+        self.run_str(&name, &text)
+    }
+
+    /// Compiles and runs script text; `name` is used in messages.
+    pub fn run_str(&self, name: &str, text: &str) -> Result<(), ScriptError> {
+        let ast = self.compile(name, text)?;
+        let mut scope = self.scope();
+        self.context.start(name);
+        let result = self.engine.run_ast_with_scope(&mut scope, &ast);
+        self.context.finish();
+        result.map_err(|e| self.render(name, &e))
+    }
+
+    /// The function list of `--api`, grouped by module.
+    pub fn api(&self) -> Vec<ApiFunction> {
+        api_listing(&self.engine)
+    }
+
+    fn compile(&self, name: &str, text: &str) -> Result<AST, ScriptError> {
+        let mut ast = self
+            .engine
+            .compile_with_scope(&self.scope(), text)
+            .map_err(|e| parse_error(name, &e))?;
+        ast.set_source(name);
+        Ok(ast)
+    }
+
+    /// A scope holding the `--set` parameters as constants.
+    fn scope(&self) -> Scope<'static> {
+        let mut scope = Scope::new();
+        for (name, value) in &self.context.params {
+            scope.push_constant_dynamic(name.clone(), value.clone());
+        }
+        scope
+    }
+
+    fn render(&self, file: &str, err: &EvalAltResult) -> ScriptError {
+        let pos = deepest_position(err);
+        ScriptError::at(file, pos, &self.message(err))
+    }
+
+    /// One-line message for the innermost cause, naming the script functions it passed through.
+    fn message(&self, err: &EvalAltResult) -> String {
+        let inner = err.unwrap_inner();
+        let base = match inner {
+            EvalAltResult::ErrorRuntime(value, _) => value.to_string(),
+            EvalAltResult::ErrorTooManyOperations(_) => format!(
+                "operation limit {} exceeded (endless loop? raise it with --max-operations)",
+                self.max_operations
+            ),
+            EvalAltResult::ErrorStackOverflow(_) => {
+                format!("call depth limit {MAX_CALL_LEVELS} exceeded (runaway recursion?)")
+            }
+            other => {
+                let text = other.to_string();
+                let suffix = format!(" ({})", other.position());
+                text.strip_suffix(&suffix).unwrap_or(&text).to_string()
+            }
+        };
+        let functions = called_functions(err);
+        if functions.is_empty() {
+            base
+        } else {
+            format!("{base} (in function {})", functions.join(" <- "))
+        }
+    }
+}
+
+/// Reads a script file; the name used in messages is the path as given.
+fn read_script(path: &Path) -> Result<(String, String), ScriptError> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| ScriptError::new(&name, format!("cannot read script: {e}")))?;
+    Ok((name, text))
+}
+
+fn parse_error(file: &str, err: &ParseError) -> ScriptError {
+    ScriptError::at(file, err.1, &format!("syntax error: {}", err.0))
+}
+
+/// The position of the innermost error in a chain of script function calls that has one.
+fn deepest_position(err: &EvalAltResult) -> Position {
+    let inner_pos = match err {
+        EvalAltResult::ErrorInFunctionCall(.., inner, _)
+        | EvalAltResult::ErrorInModule(.., inner, _) => deepest_position(inner),
+        _ => Position::NONE,
+    };
+    if inner_pos.is_none() {
+        err.position()
+    } else {
+        inner_pos
+    }
+}
+
+/// Names of the script functions an error passed through, innermost first.
+fn called_functions(err: &EvalAltResult) -> Vec<String> {
+    match err {
+        EvalAltResult::ErrorInFunctionCall(name, _, inner, _) => {
+            let mut names = called_functions(inner);
+            names.push(format!("'{name}'"));
+            names
+        }
+        EvalAltResult::ErrorInModule(_, inner, _) => called_functions(inner),
+        _ => Vec::new(),
+    }
+}
+
+/// The sandboxed engine: limits, no `import` of files, print routed to stderr.
+fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
+    let mut engine = Engine::new();
+    engine
+        .set_max_operations(max_operations)
+        .set_max_call_levels(MAX_CALL_LEVELS)
+        .set_max_string_size(MAX_STRING_SIZE)
+        .set_max_array_size(MAX_ARRAY_SIZE)
+        .set_max_map_size(MAX_MAP_SIZE)
+        .set_module_resolver(DummyModuleResolver::new())
+        .set_default_tag(Dynamic::from(Arc::clone(context)));
+    let printer = Arc::clone(context);
+    engine.on_print(move |text| printer.print(text));
+    let debugger = Arc::clone(context);
+    engine.on_debug(move |text, _source, pos| debugger.print(&format!("{pos}: {text}")));
+    signal::register_types(&mut engine);
+    for (name, build) in MODULES {
+        engine.register_static_module(*name, build().into());
+    }
+    engine
+}
+
+/// Checks that a `--set` name is a valid Rhai identifier.
+fn check_param_name(name: &str) -> Result<(), String> {
+    let mut chars = name.chars();
+    let first_ok = chars
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_');
+    if first_ok && chars.all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        Ok(())
+    } else {
+        Err(format!(
+            "parameter name '{name}' is not an identifier (letters, digits, '_')"
+        ))
+    }
+}
+
+/// Parses a `--set` value: integer, then float, then `true`/`false`, else a string.
+pub fn parse_param_value(text: &str) -> Dynamic {
+    if let Ok(i) = text.parse::<rhai::INT>() {
+        Dynamic::from_int(i)
+    } else if let Ok(f) = text.parse::<rhai::FLOAT>() {
+        Dynamic::from_float(f)
+    } else if let Ok(b) = text.parse::<bool>() {
+        Dynamic::from_bool(b)
+    } else {
+        Dynamic::from(text.to_string())
+    }
+}
+
+/// One registered function as listed by `--api`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ApiFunction {
+    /// Rhai module the function is registered in.
+    pub module: String,
+    /// Signature with parameter names, types and return type.
+    pub signature: String,
+    /// First paragraph of its doc comment, on one line.
+    pub description: String,
+}
+
+/// Lists every function of the host's modules from the engine's own metadata.
+fn api_listing(engine: &Engine) -> Vec<ApiFunction> {
+    let json = engine
+        .gen_fn_metadata_to_json(false)
+        .expect("function metadata serialises to JSON");
+    let meta: serde_json::Value = serde_json::from_str(&json).expect("metadata is valid JSON");
+    let mut out = Vec::new();
+    if let Some(modules) = meta["modules"].as_object() {
+        for (module, m) in modules {
+            for f in m["functions"].as_array().into_iter().flatten() {
+                out.push(api_function(module, f));
+            }
+        }
+    }
+    out
+}
+
+/// One [`ApiFunction`] from a function's metadata record.
+fn api_function(module: &str, f: &serde_json::Value) -> ApiFunction {
+    let docs: Vec<&str> = f["docComments"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|d| d.as_str())
+        .collect();
+    ApiFunction {
+        module: module.to_string(),
+        signature: signature(module, f),
+        description: first_paragraph(&docs),
+    }
+}
+
+/// A script-facing signature: `module::name(p: type, ...) -> type` for namespaced functions,
+/// `name(...)` for global ones (callable bare or as methods), `Type.prop -> type` for getters.
+fn signature(module: &str, f: &serde_json::Value) -> String {
+    let name = f["name"].as_str().unwrap_or_default();
+    let params: Vec<(String, String)> = f["params"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|p| {
+            let n = p["name"].as_str().unwrap_or("_").to_string();
+            (n, script_type(p["type"].as_str().unwrap_or("?")))
+        })
+        .collect();
+    let ret = script_type(f["returnType"].as_str().unwrap_or_default());
+    let arrow = if ret.is_empty() {
+        String::new()
+    } else {
+        format!(" -> {ret}")
+    };
+    if let (Some(prop), Some((_, owner))) = (name.strip_prefix("get$"), params.first()) {
+        return format!("{owner}.{prop}{arrow}");
+    }
+    let list: Vec<String> = params.iter().map(|(n, t)| format!("{n}: {t}")).collect();
+    let prefix = if f["namespace"] == "global" {
+        String::new()
+    } else {
+        format!("{module}::")
+    };
+    format!("{prefix}{name}({}){arrow}", list.join(", "))
+}
+
+/// A Rust parameter or return type as scripts see it (`&mut Signal` -> `Signal`,
+/// `Res<f64>` -> `float`, `()` -> empty).
+fn script_type(rust: &str) -> String {
+    let t: String = rust.chars().filter(|c| !c.is_whitespace()).collect();
+    let t = t
+        .trim_start_matches("rhai::")
+        .trim_start_matches("&mut")
+        .trim_start_matches('&');
+    let t = t
+        .strip_prefix("Res<")
+        .and_then(|x| x.strip_suffix('>'))
+        .unwrap_or(t);
+    let t = t
+        .strip_prefix("Result<")
+        .and_then(|x| x.split_once(','))
+        .map_or(t, |(ok, _)| ok);
+    match t {
+        "()" => "",
+        "f64" | "FLOAT" => "float",
+        "i64" | "INT" => "int",
+        "str" | "String" | "ImmutableString" => "string",
+        "Dynamic" => "any",
+        "Map" => "map",
+        "Array" => "array",
+        other => other,
+    }
+    .to_string()
+}
+
+/// The first paragraph of doc comment lines, without `///` markers, joined on one line.
+fn first_paragraph(docs: &[&str]) -> String {
+    docs.iter()
+        .flat_map(|d| d.lines())
+        .map(|l| l.trim().trim_start_matches("///").trim())
+        .take_while(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn context(dir: &Path) -> HostContext {
+        HostContext {
+            out_dir: dir.to_path_buf(),
+            params: BTreeMap::new(),
+            quiet: true,
+            script: RwLock::new(String::new()),
+            progress: RwLock::new(None),
+        }
+    }
+
+    #[test]
+    fn output_paths_stay_under_the_output_dir() {
+        let dir = std::env::temp_dir().join(format!("trnews-resolve-{}", std::process::id()));
+        let ctx = context(&dir);
+        let ok = ctx.resolve_output("plots/a/b.png").expect("relative path");
+        assert_eq!(ok, dir.join("plots/a/b.png"));
+        assert!(
+            dir.join("plots/a").is_dir(),
+            "parent directories are created"
+        );
+        for bad in ["../x.png", "a/../../x.png", "/tmp/x.png", ""] {
+            let e = ctx.resolve_output(bad).expect_err(bad);
+            assert!(e.contains(&format!("'{bad}'")) || bad.is_empty(), "{e}");
+        }
+        std::fs::remove_dir_all(&dir).expect("clean up");
+    }
+
+    #[test]
+    fn param_values_parse_as_int_float_bool_or_string() {
+        assert_eq!(parse_param_value("12").as_int(), Ok(12));
+        assert_eq!(parse_param_value("1e-3").as_float(), Ok(1e-3));
+        assert_eq!(parse_param_value("true").as_bool(), Ok(true));
+        assert_eq!(
+            parse_param_value("paper").into_string().as_deref(),
+            Ok("paper")
+        );
+    }
+
+    #[test]
+    fn param_names_must_be_identifiers() {
+        assert!(check_param_name("resolution_2").is_ok());
+        for bad in ["", "2x", "a-b", "a b"] {
+            assert!(check_param_name(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn rust_types_read_as_script_types() {
+        assert_eq!(script_type("&mut Signal"), "Signal");
+        assert_eq!(script_type("Res<()>"), "");
+        assert_eq!(
+            script_type("Result<String, Box<rhai::EvalAltResult>>"),
+            "string"
+        );
+        assert_eq!(script_type("f64"), "float");
+        assert_eq!(script_type("&str"), "string");
+    }
+
+    #[test]
+    fn doc_paragraph_is_joined_on_one_line() {
+        let docs = ["/// First line", "/// continues.", "///", "/// Details."];
+        assert_eq!(first_paragraph(&docs), "First line continues.");
+    }
+}
