@@ -11,7 +11,7 @@ use crate::material::{Orthotropic, Plane};
 use crate::mesh::{Mesh, Side};
 use crate::signal::Signal;
 use crate::solve::{
-    self, segment_receiver, traction_source, Quantity, Receiver, RunConfig, RunOutput,
+    self, segment_receiver, traction_source, Integrator, Quantity, Receiver, RunConfig, RunOutput,
     StabilityEstimate,
 };
 use serde::{Deserialize, Serialize};
@@ -436,4 +436,61 @@ fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Rec
             )
         })
         .collect()
+}
+
+/// Options of one transmission (a run of the scene), as scripts give them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TransmitOptions {
+    /// Simulated duration (s).
+    pub duration_s: f64,
+    /// Time step (s); `None` takes 0.9 dt_crit. Newmark needs one.
+    pub dt_s: Option<f64>,
+    /// Integrator: `#{kind: "explicit"}` or `#{kind: "newmark", consistent_mass: true}`.
+    pub integrator: Integrator,
+    /// Run even above the explicit stability limit (to study instability).
+    pub force: bool,
+    /// Energy-ledger sampling interval (steps).
+    pub ledger_every: usize,
+    /// Keep a displacement snapshot every this many steps.
+    pub snapshot_every: Option<usize>,
+    /// Record the crack faces.
+    pub record_crack: bool,
+    /// Override the scene's contact options for this run (`None` keeps the scene's).
+    pub contact: Option<ContactOptions>,
+    /// Show a progress bar on a terminal.
+    pub progress: bool,
+}
+
+impl Default for TransmitOptions {
+    fn default() -> Self {
+        TransmitOptions {
+            duration_s: 60e-6,
+            dt_s: None,
+            integrator: Integrator::Explicit,
+            force: false,
+            ledger_every: 20,
+            snapshot_every: None,
+            record_crack: false,
+            contact: None,
+            progress: false,
+        }
+    }
+}
+
+impl Scene {
+    /// The run configuration for `options`.
+    pub fn config(&self, options: &TransmitOptions) -> RunConfig {
+        RunConfig {
+            dt_s: options.dt_s,
+            integrator: options.integrator,
+            force: options.force,
+            ledger_every: options.ledger_every,
+            snapshot_every: options.snapshot_every,
+            record_crack: options.record_crack,
+            contact: options.contact.or(self.contact),
+            progress: options.progress,
+            ..self.run_config(options.duration_s)
+        }
+    }
 }

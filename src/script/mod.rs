@@ -10,13 +10,17 @@
 //! Rhai names exposed here: `signal`, `plot`, `io`, `material`, `laminate`, `test`, `host`.
 
 mod convert;
+mod figure;
 mod host;
 mod io;
 mod laminate;
 mod material;
 mod plot;
+mod scene;
 mod signal;
+mod study;
 mod test;
+mod trnews;
 
 pub use convert::{ScriptResult, WithPosition};
 
@@ -36,6 +40,10 @@ const MODULES: &[(&str, fn() -> Module)] = &[
     ("io", io::module),
     ("material", material::module),
     ("laminate", laminate::module),
+    ("scene", scene::module),
+    ("trnews", trnews::module),
+    ("study", study::module),
+    ("figure", figure::module),
     ("test", test::module),
     ("host", host::module),
 ];
@@ -395,6 +403,9 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
     let debugger = Arc::clone(context);
     engine.on_debug(move |text, _source, pos| debugger.print(&format!("{pos}: {text}")));
     signal::register_types(&mut engine);
+    scene::register_types(&mut engine);
+    trnews::register_types(&mut engine);
+    study::register_types(&mut engine);
     for (name, build) in MODULES {
         engine.register_static_module(*name, build().into());
     }

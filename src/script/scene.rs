@@ -1,0 +1,189 @@
+//! Rhai module `scene`: build the report's scene (or a variant) and run it. Types: `Scene`
+//! (a built scene) and `Run` (one run's traces, report, ledger, crack traces, snapshots).
+
+use crate::scene::{Scene, SceneSpec};
+use crate::script::convert::{error, options, ScriptResult, WithPosition};
+use crate::solve::RunOutput;
+use rhai::plugin::*;
+use rhai::{Engine, Map, Module, NativeCallContext};
+use std::sync::Arc;
+
+/// A built scene, shared by the runs and responders that use it.
+pub type SceneRef = Arc<Scene>;
+/// One run's output.
+pub type RunRef = Arc<RunOutput>;
+
+/// Registers the display names of the custom types.
+pub fn register_types(engine: &mut Engine) {
+    engine.register_type_with_name::<SceneRef>("Scene").register_type_with_name::<RunRef>("Run");
+}
+
+/// The `scene` module.
+pub fn module() -> Module {
+    exported_module!(scene_api)
+}
+
+/// Builds a scene from an override map over `base`.
+fn build(ctx: &NativeCallContext, overrides: Map, base: SceneSpec) -> ScriptResult<SceneRef> {
+    let spec: SceneSpec = options(ctx, overrides, &base, "scene")?;
+    Ok(Arc::new(Scene::build(&spec).at(ctx)?))
+}
+
+/// A 1-based index into `len` items, named `what` in errors.
+pub fn index(ctx: &NativeCallContext, k: rhai::INT, len: usize, what: &str) -> ScriptResult<usize> {
+    usize::try_from(k).ok().filter(|&k| k >= 1 && k <= len).map(|k| k - 1).ok_or_else(|| error(ctx, format!("{what} {k} does not exist (1..={len})")))
+}
+
+#[export_module]
+mod scene_api {
+    use super::{index, RunRef, SceneRef};
+    use crate::scene::{SceneSpec, TransmitOptions};
+    use crate::script::convert::{options, to_dynamic, WithPosition};
+    use crate::signal::Signal;
+    use rhai::{Array, Dynamic, Map, NativeCallContext, FLOAT, INT};
+    use std::sync::Arc;
+
+    type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
+
+    /// The default scene (the report's configuration, quick resolution) as a map of every field.
+    #[rhai_fn(return_raw)]
+    pub fn default_spec(ctx: NativeCallContext) -> Res<Dynamic> {
+        to_dynamic(&ctx, &SceneSpec::default())
+    }
+
+    /// Builds the default scene with the fields of `overrides` replaced (unknown fields are errors); `crack: ()` removes the crack.
+    #[rhai_fn(return_raw)]
+    pub fn build(ctx: NativeCallContext, overrides: Map) -> Res<SceneRef> {
+        super::build(&ctx, overrides, SceneSpec::default())
+    }
+
+    /// Builds the scene at the "paper" resolution (20 um x 10 um elements) with `overrides`.
+    #[rhai_fn(return_raw)]
+    pub fn build_paper(ctx: NativeCallContext, overrides: Map) -> Res<SceneRef> {
+        super::build(&ctx, overrides, SceneSpec::paper())
+    }
+
+    /// The same scene rebuilt without its crack (same laminate draw and mesh sizes).
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn uncracked(ctx: NativeCallContext, scene: &mut SceneRef) -> Res<SceneRef> {
+        Ok(Arc::new(crate::scene::Scene::build(&scene.spec.uncracked()).at(&ctx)?))
+    }
+
+    /// Degrees of freedom of the scene's model.
+    #[rhai_fn(global, get = "dofs", pure)]
+    pub fn dofs(scene: &mut SceneRef) -> INT {
+        scene.model.dofs() as INT
+    }
+
+    /// Default time step of its runs, 0.9 dt_crit (s).
+    #[rhai_fn(global, get = "dt", pure)]
+    pub fn dt(scene: &mut SceneRef) -> FLOAT {
+        scene.default_dt_s()
+    }
+
+    /// Critical explicit step estimated by Lanczos on M^-1 K (s).
+    #[rhai_fn(global, get = "dt_crit", pure)]
+    pub fn dt_crit(scene: &mut SceneRef) -> FLOAT {
+        scene.stability.dt_crit_s
+    }
+
+    /// True without a contacting crack: responses are then convolutions of one impulse response.
+    #[rhai_fn(global, get = "linear", pure)]
+    pub fn linear(scene: &mut SceneRef) -> bool {
+        scene.is_linear()
+    }
+
+    /// Summary map: spec, DOFs, nodes, elements, layers, size, dt_crit and its element bound, clamped epoxy fraction, crack pairs.
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn summary(ctx: NativeCallContext, scene: &mut SceneRef) -> Res<Dynamic> {
+        let (x0, x1, y0, y1) = scene.model.mesh.bounds();
+        let mut m = Map::new();
+        m.insert("spec".into(), to_dynamic(&ctx, &scene.spec)?);
+        m.insert("dofs".into(), (scene.model.dofs() as INT).into());
+        m.insert("nodes".into(), (scene.model.mesh.nodes.len() as INT).into());
+        m.insert("elements".into(), (scene.model.mesh.triangles.len() as INT).into());
+        m.insert("layers".into(), (scene.laminate.layers.len() as INT).into());
+        m.insert("width_m".into(), (x1 - x0).into());
+        m.insert("height_m".into(), (y1 - y0).into());
+        m.insert("stability".into(), to_dynamic(&ctx, &scene.stability)?);
+        m.insert("clamped_epoxy_fraction".into(), scene.laminate.clamped_fraction().into());
+        m.insert("crack_pairs".into(), (scene.model.crack.as_ref().map_or(0, |c| c.pairs.len()) as INT).into());
+        Ok(m.into())
+    }
+
+    /// Transmits `traction` (Pa) from the transmitter with run options #{duration_s, dt_s, integrator, force, ledger_every, snapshot_every, record_crack, contact, progress}; returns the Run.
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn transmit(ctx: NativeCallContext, scene: &mut SceneRef, traction: Signal, run_options: Map) -> Res<RunRef> {
+        let o: TransmitOptions = options(&ctx, run_options, &TransmitOptions::default(), "run")?;
+        Ok(Arc::new(scene.transmit(&traction, &scene.config(&o)).at(&ctx)?))
+    }
+
+    /// Traces of every receiver, in order (array of Signal).
+    #[rhai_fn(global, get = "traces", pure)]
+    pub fn traces(run: &mut RunRef) -> Array {
+        run.traces.iter().cloned().map(Dynamic::from).collect()
+    }
+
+    /// Trace of receiver `k` (1-based).
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn trace(ctx: NativeCallContext, run: &mut RunRef, k: INT) -> Res<Signal> {
+        Ok(run.traces[index(&ctx, k, run.traces.len(), "receiver")?].clone())
+    }
+
+    /// The run report: wall time, steps, DOFs, dt, dt_crit, dt/dt_crit, energy residuals, source work, contact diagnostics.
+    #[rhai_fn(global, get = "report", pure, return_raw)]
+    pub fn report(ctx: NativeCallContext, run: &mut RunRef) -> Res<Dynamic> {
+        to_dynamic(&ctx, &run.report)
+    }
+
+    /// The energy ledger: #{time_s, kinetic_j, strain_j, source_work_j, dashpot_loss_j, contact_loss_j, friction_loss_j, residual, initial_j}.
+    #[rhai_fn(global, get = "ledger", pure, return_raw)]
+    pub fn ledger(ctx: NativeCallContext, run: &mut RunRef) -> Res<Dynamic> {
+        to_dynamic(&ctx, &run.ledger)
+    }
+
+    /// Number of crack pairs recorded (0 unless the run had record_crack and a crack).
+    #[rhai_fn(global, get = "crack_pairs", pure)]
+    pub fn crack_pairs(run: &mut RunRef) -> INT {
+        run.crack.as_ref().map_or(0, |c| c.x_m.len() as INT)
+    }
+
+    /// Normal gap g_N of crack pair `k` (1-based, ordered by x): > 0 is penetration (m).
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn crack_gap(ctx: NativeCallContext, run: &mut RunRef, k: INT) -> Res<Signal> {
+        let c = run.crack.as_ref().ok_or_else(|| super::error(&ctx, "the run recorded no crack (set record_crack: true on a cracked scene)"))?;
+        Ok(c.normal_gap[index(&ctx, k, c.normal_gap.len(), "crack pair")?].clone())
+    }
+
+    /// Vertical displacement of the upper crack face at pair `k` (1-based) (m).
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn crack_upper(ctx: NativeCallContext, run: &mut RunRef, k: INT) -> Res<Signal> {
+        let c = run.crack.as_ref().ok_or_else(|| super::error(&ctx, "the run recorded no crack (set record_crack: true on a cracked scene)"))?;
+        Ok(c.master_uy[index(&ctx, k, c.master_uy.len(), "crack pair")?].clone())
+    }
+
+    /// Number of snapshots kept.
+    #[rhai_fn(global, get = "snapshots", pure)]
+    pub fn snapshots(run: &mut RunRef) -> INT {
+        run.snapshots.len() as INT
+    }
+
+    /// Time of snapshot `k` (1-based) (s).
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn snapshot_time(ctx: NativeCallContext, run: &mut RunRef, k: INT) -> Res<FLOAT> {
+        Ok(run.snapshots[index(&ctx, k, run.snapshots.len(), "snapshot")?].time_s)
+    }
+
+    /// Writes snapshot `k` (1-based) of a run of `scene` as a VTU file for ParaView (displacement vector and material id).
+    #[rhai_fn(global, return_raw)]
+    pub fn write_vtu(ctx: NativeCallContext, path: &str, scene: SceneRef, run: RunRef, k: INT) -> Res<()> {
+        let snap = &run.snapshots[index(&ctx, k, run.snapshots.len(), "snapshot")?];
+        let file = crate::script::HostContext::of(&ctx)?.resolve_output(path).map_err(|e| super::error(&ctx, e))?;
+        let mesh = &scene.model.mesh;
+        let mut material = vec![0.0; mesh.nodes.len()];
+        for (t, &m) in mesh.triangles.iter().zip(&mesh.element_material) {
+            t.iter().for_each(|&n| material[n] = m as f64);
+        }
+        crate::io::write_vtu(&file, &mesh.nodes, &mesh.triangles, &[("displacement", 2, &snap.displacement), ("material", 1, &material)]).at(&ctx)
+    }
+}

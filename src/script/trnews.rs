@@ -1,0 +1,239 @@
+//! Rhai module `trnews`: the TR-NEWS procedure, delayed TR-NEWS and pulse inversion.
+//! Types: `Responder`, `TrNews`, `Focus`, `Delayed`.
+
+use crate::script::convert::{error, floats, ScriptResult};
+use crate::trnews::{Delayed, Focus, Responder, TrNews};
+use rhai::plugin::*;
+use rhai::{Array, Engine, Map, Module, NativeCallContext};
+use std::sync::Arc;
+
+/// A TR-NEWS result shared by its focus and delayed objects.
+pub type TrNewsRef = Arc<TrNews>;
+
+/// Registers the display names of the custom types.
+pub fn register_types(engine: &mut Engine) {
+    engine
+        .register_type_with_name::<Responder>("Responder")
+        .register_type_with_name::<TrNewsRef>("TrNews")
+        .register_type_with_name::<Focus>("Focus")
+        .register_type_with_name::<Delayed>("Delayed");
+}
+
+/// The `trnews` module.
+pub fn module() -> Module {
+    exported_module!(trnews_api)
+}
+
+/// Delay points from an array of maps #{delays: [...], amplitudes: [...]}.
+fn points(ctx: &NativeCallContext, list: &Array) -> ScriptResult<Vec<(Vec<f64>, Vec<f64>)>> {
+    list.iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let map = p.read_lock::<Map>().ok_or_else(|| error(ctx, format!("points[{i}] must be a map #{{delays, amplitudes}}")))?;
+            let field = |name: &str| map.get(name).ok_or_else(|| error(ctx, format!("points[{i}] has no field '{name}'")));
+            Ok((floats(ctx, field("delays")?, &format!("points[{i}].delays"))?, floats(ctx, field("amplitudes")?, &format!("points[{i}].amplitudes"))?))
+        })
+        .collect()
+}
+
+#[export_module]
+mod trnews_api {
+    use super::{points, TrNewsRef};
+    use crate::script::convert::{options, to_dynamic, WithPosition};
+    use crate::script::scene::{index, SceneRef};
+    use crate::signal::Signal;
+    use crate::trnews::{delayed_tr_news, tr_news, Delayed, Focus, Responder, TrNewsSpec};
+    use rhai::{Array, Dynamic, Map, NativeCallContext, FLOAT, INT};
+    use std::sync::Arc;
+
+    type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
+
+    /// The report's TR-NEWS parameters #{f0_hz, f1_hz, chirp_s, signal_s, taper, record_s, window_s, after_focus_s, receivers, pulse_inversion, main_lobe_half_width_s}.
+    #[rhai_fn(return_raw)]
+    pub fn default_spec(ctx: NativeCallContext) -> Res<Dynamic> {
+        to_dynamic(&ctx, &TrNewsSpec::default())
+    }
+
+    /// A responder for `scene`: a linear scene runs its impulse response once over `duration_s` and convolves afterwards; a cracked one simulates every transmission.
+    #[rhai_fn(return_raw)]
+    pub fn responder(ctx: NativeCallContext, scene: SceneRef, duration_s: FLOAT) -> Res<Responder> {
+        Responder::new(scene, duration_s).at(&ctx)
+    }
+
+    /// A responder that simulates every transmission, even for a linear scene (for validation).
+    pub fn simulating(scene: SceneRef) -> Responder {
+        Responder::simulating(scene)
+    }
+
+    /// Solver step of the responses (s).
+    #[rhai_fn(global, get = "dt", pure)]
+    pub fn dt(r: &mut Responder) -> FLOAT {
+        r.dt_s()
+    }
+
+    /// Report of the impulse-response run, or () when the responder simulates.
+    #[rhai_fn(global, get = "impulse_report", pure, return_raw)]
+    pub fn impulse_report(ctx: NativeCallContext, r: &mut Responder) -> Res<Dynamic> {
+        r.impulse_report().map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))
+    }
+
+    /// Receivers' responses to `traction` (Pa) over `duration_s`: #{traces: [Signal], report: map or ()}.
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn respond(ctx: NativeCallContext, r: &mut Responder, traction: Signal, duration_s: FLOAT) -> Res<Dynamic> {
+        let out = r.respond(&traction, duration_s).at(&ctx)?;
+        let mut m = Map::new();
+        m.insert("traces".into(), out.traces.into_iter().map(Dynamic::from).collect::<Array>().into());
+        m.insert("report".into(), out.report.as_ref().map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))?);
+        Ok(m.into())
+    }
+
+    /// Runs TR-NEWS (chirp -> y -> Gamma -> Gamma(T - t) -> focus) with options over the report's defaults.
+    #[rhai_fn(global, name = "tr_news", return_raw)]
+    pub fn run(ctx: NativeCallContext, r: Responder, spec: Map) -> Res<TrNewsRef> {
+        let spec: TrNewsSpec = options(&ctx, spec, &TrNewsSpec::default(), "tr_news")?;
+        Ok(Arc::new(tr_news(&r, &spec).at(&ctx)?))
+    }
+
+    /// The transmitted chirp c(t) (Pa).
+    #[rhai_fn(global, get = "chirp", pure)]
+    pub fn chirp(tr: &mut TrNewsRef) -> Signal {
+        tr.chirp.clone()
+    }
+
+    /// First-pass responses y at every receiver (array of Signal).
+    #[rhai_fn(global, get = "responses", pure)]
+    pub fn responses(tr: &mut TrNewsRef) -> Array {
+        tr.responses.iter().cloned().map(Dynamic::from).collect()
+    }
+
+    /// Report of the chirp run, or () when convolved.
+    #[rhai_fn(global, get = "chirp_report", pure, return_raw)]
+    pub fn chirp_report(ctx: NativeCallContext, tr: &mut TrNewsRef) -> Res<Dynamic> {
+        tr.chirp_report.as_ref().map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))
+    }
+
+    /// The focusing at receiver `k` (1-based receiver number; it must have been focused).
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn focus(ctx: NativeCallContext, tr: &mut TrNewsRef, k: INT) -> Res<Focus> {
+        tr.focus.iter().find(|f| f.receiver as INT == k).cloned().ok_or_else(|| super::error(&ctx, format!("receiver {k} was not focused (options.receivers)")))
+    }
+
+    /// Receiver numbers that were focused.
+    #[rhai_fn(global, get = "receivers", pure)]
+    pub fn receivers(tr: &mut TrNewsRef) -> Array {
+        tr.focus.iter().map(|f| Dynamic::from(f.receiver as INT)).collect()
+    }
+
+    /// The focused signal y_TR at the receiver.
+    #[rhai_fn(global, get = "focused", pure)]
+    pub fn focused(f: &mut Focus) -> Signal {
+        f.focused.clone()
+    }
+
+    /// The transmitted focusing signal Gamma(T - t) scaled to the peak traction (Pa).
+    #[rhai_fn(global, get = "source", pure)]
+    pub fn source(f: &mut Focus) -> Signal {
+        f.source.clone()
+    }
+
+    /// The correlation Gamma(tau) over the lag window.
+    #[rhai_fn(global, get = "gamma", pure)]
+    pub fn gamma(f: &mut Focus) -> Signal {
+        f.gamma.clone()
+    }
+
+    /// The pulse-inversion sum (focused + response to the inverted source), or ().
+    #[rhai_fn(global, get = "pi_sum", pure)]
+    pub fn pi_sum(f: &mut Focus) -> Dynamic {
+        f.pi_sum.clone().map_or(Dynamic::UNIT, Dynamic::from)
+    }
+
+    /// Peak of the focused signal #{time_s, amplitude, width_6db_s}.
+    #[rhai_fn(global, get = "peak", pure, return_raw)]
+    pub fn peak(ctx: NativeCallContext, f: &mut Focus) -> Res<Dynamic> {
+        to_dynamic(&ctx, &f.peak)
+    }
+
+    /// Side-lobe measures around the focus #{main_peak, max_side_lobe_before, max_side_lobe_after, main_to_side_db, asymmetry, ...}.
+    #[rhai_fn(global, get = "side_lobes", pure, return_raw)]
+    pub fn side_lobes(ctx: NativeCallContext, f: &mut Focus) -> Res<Dynamic> {
+        to_dynamic(&ctx, &f.side_lobes)
+    }
+
+    /// Reports of the focusing runs (empty when convolved).
+    #[rhai_fn(global, get = "reports", pure, return_raw)]
+    pub fn reports(ctx: NativeCallContext, f: &mut Focus) -> Res<Dynamic> {
+        to_dynamic(&ctx, &f.reports)
+    }
+
+    /// Delayed TR-NEWS at receiver `k` for points [#{delays: [s...], amplitudes: [...]}]: simulations (in parallel) vs linear predictions; misfit over the focus window widened by half_window_s.
+    #[rhai_fn(global, return_raw)]
+    pub fn delayed(ctx: NativeCallContext, r: Responder, tr: TrNewsRef, k: INT, list: Array, half_window_s: FLOAT) -> Res<Array> {
+        let focus = tr.focus.iter().find(|f| f.receiver as INT == k).ok_or_else(|| super::error(&ctx, format!("receiver {k} was not focused")))?;
+        let points = points(&ctx, &list)?;
+        let results = delayed_tr_news(&r, &tr, focus, &points, half_window_s).at(&ctx)?;
+        Ok(results.into_iter().map(Dynamic::from).collect())
+    }
+
+    /// The linear prediction sum a_i y_TR(t - tau_i).
+    #[rhai_fn(global, get = "prediction", pure)]
+    pub fn prediction(d: &mut Delayed) -> Signal {
+        d.prediction.clone()
+    }
+
+    /// The simulated response to the composite source.
+    #[rhai_fn(global, get = "simulation", pure)]
+    pub fn simulation(d: &mut Delayed) -> Signal {
+        d.simulation.clone()
+    }
+
+    /// Relative L2 misfit between simulation and prediction over the focus window.
+    #[rhai_fn(global, get = "misfit", pure)]
+    pub fn misfit(d: &mut Delayed) -> FLOAT {
+        d.misfit
+    }
+
+    /// Relative difference of the peak amplitudes (simulation - prediction) / prediction.
+    #[rhai_fn(global, get = "peak_difference", pure)]
+    pub fn peak_difference(d: &mut Delayed) -> FLOAT {
+        d.peak_difference
+    }
+
+    /// Everything about the point as a map (delays, amplitudes, misfit, peak difference, window, report), without the signals.
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn summary(ctx: NativeCallContext, d: &mut Delayed) -> Res<Dynamic> {
+        let mut m = Map::new();
+        m.insert("delays_s".into(), to_dynamic(&ctx, &d.delays_s)?);
+        m.insert("amplitudes".into(), to_dynamic(&ctx, &d.amplitudes)?);
+        m.insert("misfit".into(), d.misfit.into());
+        m.insert("peak_difference".into(), d.peak_difference.into());
+        m.insert("window_s".into(), to_dynamic(&ctx, &[d.window_s.0, d.window_s.1])?);
+        m.insert("report".into(), d.report.as_ref().map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))?);
+        Ok(m.into())
+    }
+
+    /// Pulse inversion of `traction`: #{positive: [Signal], negative: [Signal], sum: [Signal], reports: [map]} per receiver.
+    #[rhai_fn(global, return_raw)]
+    pub fn pulse_inversion(ctx: NativeCallContext, r: Responder, traction: Signal, duration_s: FLOAT) -> Res<Dynamic> {
+        let pi = crate::trnews::pulse_inversion(&r, &traction, duration_s).at(&ctx)?;
+        let list = |v: Vec<Signal>| -> Dynamic { v.into_iter().map(Dynamic::from).collect::<Array>().into() };
+        let mut m = Map::new();
+        m.insert("reports".into(), to_dynamic(&ctx, &pi.reports)?);
+        m.insert("positive".into(), list(pi.positive));
+        m.insert("negative".into(), list(pi.negative));
+        m.insert("sum".into(), list(pi.sum));
+        Ok(m.into())
+    }
+
+    /// Number of receivers of the scene.
+    #[rhai_fn(global, get = "receiver_count", pure)]
+    pub fn receiver_count(tr: &mut TrNewsRef) -> INT {
+        tr.responses.len() as INT
+    }
+
+    /// Response of receiver `k` (1-based) in the first (chirp) pass.
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn response(ctx: NativeCallContext, tr: &mut TrNewsRef, k: INT) -> Res<Signal> {
+        Ok(tr.responses[index(&ctx, k, tr.responses.len(), "receiver")?].clone())
+    }
+}
