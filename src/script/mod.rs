@@ -28,9 +28,12 @@ use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, RwLock};
 use std::time::Duration;
 
+/// Builds one Rhai module from its `#[export_module]`.
+type ModuleBuilder = fn() -> Module;
+
 /// Every Rhai module of the host: its name in scripts and its builder.
 /// Adding a binding (e.g. `scene`) is one entry here plus its file.
-const MODULES: &[(&str, fn() -> Module)] = &[
+const MODULES: &[(&str, ModuleBuilder)] = &[
     ("signal", signal::module),
     ("plot", plot::module),
     ("io", io::module),
