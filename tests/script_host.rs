@@ -250,7 +250,7 @@ fn check_compiles_without_running() {
 #[test]
 fn api_lists_functions_with_descriptions() {
     let dir = TempDir::new("cli-api");
-    let o = cli(dir.path(), &["--api", "unused.rhai"]);
+    let o = cli(dir.path(), &["--api"]);
     assert!(o.status.success());
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(

@@ -382,7 +382,8 @@ fn called_functions(err: &EvalAltResult) -> Vec<String> {
     }
 }
 
-/// The sandboxed engine: limits, no `import` of files, print routed to stderr.
+/// The sandboxed engine: limits, no `import` of files, no `eval` (its errors would have no
+/// file position), print and debug routed to stderr.
 fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
     let mut engine = Engine::new();
     engine
@@ -392,11 +393,17 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
         .set_max_array_size(MAX_ARRAY_SIZE)
         .set_max_map_size(MAX_MAP_SIZE)
         .set_module_resolver(DummyModuleResolver::new())
-        .set_default_tag(Dynamic::from(Arc::clone(context)));
+        .set_default_tag(Dynamic::from(Arc::clone(context)))
+        .disable_symbol("eval");
     let printer = Arc::clone(context);
     engine.on_print(move |text| printer.print(text));
     let debugger = Arc::clone(context);
-    engine.on_debug(move |text, _source, pos| debugger.print(&format!("{pos}: {text}")));
+    engine.on_debug(move |text, _source, pos| {
+        let at = pos.line().map_or(String::new(), |l| {
+            format!("{l}:{}: ", pos.position().unwrap_or(1))
+        });
+        debugger.print(&format!("{at}{text}"))
+    });
     signal::register_types(&mut engine);
     for (name, build) in MODULES {
         engine.register_static_module(*name, build().into());
