@@ -8,10 +8,11 @@ use trnews::script::{parse_param_value, Host, HostOptions, ScriptError, DEFAULT_
 
 /// Run a trnews experiment script (Rhai): simulations, TR-NEWS processing, figures and data files.
 #[derive(Debug, Parser)]
-#[command(version, about)]
+#[command(name = "trnews-script", version, about)]
 struct Cli {
     /// The script to run, e.g. scripts/sweep_delays.rhai.
-    script: PathBuf,
+    #[arg(required_unless_present = "api")]
+    script: Option<PathBuf>,
     /// Directory that every output path of the script is resolved under.
     #[arg(long, default_value = ".")]
     out: PathBuf,
@@ -74,19 +75,22 @@ fn run(cli: &Cli) -> Result<(), ScriptError> {
         print_api(&host);
         return Ok(());
     }
+    let Some(script) = &cli.script else {
+        return Err(ScriptError::new("trnews-script", "no script given"));
+    };
     if cli.check {
-        host.check_file(&cli.script)?;
+        host.check_file(script)?;
         if !cli.quiet {
-            eprintln!("{}: ok", cli.script.display());
+            eprintln!("{}: ok", script.display());
         }
         return Ok(());
     }
     let start = Instant::now();
-    host.run_file(&cli.script)?;
+    host.run_file(script)?;
     if !cli.quiet {
         eprintln!(
             "{}: done in {:.2} s (outputs under {})",
-            cli.script.display(),
+            script.display(),
             start.elapsed().as_secs_f64(),
             cli.out.display()
         );

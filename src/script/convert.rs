@@ -109,12 +109,12 @@ where
     T: DeserializeOwned + Serialize,
 {
     let value = to_json(ctx, &Dynamic::from_map(map))?;
-    serde_json::from_value::<T>(value.clone()).or_else(|e| {
+    serde_json::from_value::<T>(value.clone()).map_err(|e| {
         let message = match bad_field(&value, base) {
             Some((field, v, why)) => format!("{what}.{field} = {v}: {why}"),
             None => format!("{what}: {e}"),
         };
-        Err(error(ctx, message))
+        error(ctx, message)
     })
 }
 

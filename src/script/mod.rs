@@ -32,9 +32,12 @@ use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, RwLock};
 use std::time::Duration;
 
+/// Builds one Rhai module from its `#[export_module]`.
+type ModuleBuilder = fn() -> Module;
+
 /// Every Rhai module of the host: its name in scripts and its builder.
 /// Adding a binding (e.g. `scene`) is one entry here plus its file.
-const MODULES: &[(&str, fn() -> Module)] = &[
+const MODULES: &[(&str, ModuleBuilder)] = &[
     ("signal", signal::module),
     ("plot", plot::module),
     ("io", io::module),
@@ -387,7 +390,8 @@ fn called_functions(err: &EvalAltResult) -> Vec<String> {
     }
 }
 
-/// The sandboxed engine: limits, no `import` of files, print routed to stderr.
+/// The sandboxed engine: limits, no `import` of files, no `eval` (its errors would have no
+/// file position), print and debug routed to stderr.
 fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
     let mut engine = Engine::new();
     engine
@@ -397,11 +401,17 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
         .set_max_array_size(MAX_ARRAY_SIZE)
         .set_max_map_size(MAX_MAP_SIZE)
         .set_module_resolver(DummyModuleResolver::new())
-        .set_default_tag(Dynamic::from(Arc::clone(context)));
+        .set_default_tag(Dynamic::from(Arc::clone(context)))
+        .disable_symbol("eval");
     let printer = Arc::clone(context);
     engine.on_print(move |text| printer.print(text));
     let debugger = Arc::clone(context);
-    engine.on_debug(move |text, _source, pos| debugger.print(&format!("{pos}: {text}")));
+    engine.on_debug(move |text, _source, pos| {
+        let at = pos.line().map_or(String::new(), |l| {
+            format!("{l}:{}: ", pos.position().unwrap_or(1))
+        });
+        debugger.print(&format!("{at}{text}"))
+    });
     signal::register_types(&mut engine);
     scene::register_types(&mut engine);
     trnews::register_types(&mut engine);
