@@ -196,6 +196,50 @@ impl SceneSpec {
         }
     }
 
+    /// A small scene for smoke tests of scripts: 10 pairs (~2.4 mm), 6 mm wide, coarse mesh,
+    /// four receivers, a 1.2 mm crack 0.8 mm deep. Seconds per run, not physics-grade.
+    pub fn smoke() -> SceneSpec {
+        SceneSpec {
+            laminate: LaminateSpec::Stochastic(StochasticSpec {
+                pairs: 10,
+                ..Default::default()
+            }),
+            width_m: 6e-3,
+            element_size_x_m: 80e-6,
+            element_size_y_m: 40e-6,
+            transmitter: TransmitterSpec {
+                depth_top_m: 0.2e-3,
+                depth_bottom_m: 1.2e-3,
+                ..Default::default()
+            },
+            receivers: ReceiverSpec {
+                x_m: vec![1.5e-3, 2.5e-3, 3.5e-3, 4.5e-3],
+                ..Default::default()
+            },
+            crack: Some(CrackSpec {
+                depth_m: 0.8e-3,
+                x_center_m: Some(3e-3),
+                length_m: 1.2e-3,
+                ..Default::default()
+            }),
+            ..Default::default()
+        }
+    }
+
+    /// A preset by name: `quick` (the default), `paper` or `smoke`.
+    pub fn preset(name: &str) -> Result<SceneSpec> {
+        match name {
+            "quick" => Ok(SceneSpec::default()),
+            "paper" => Ok(SceneSpec::paper()),
+            "smoke" => Ok(SceneSpec::smoke()),
+            other => Err(Error::invalid(
+                "resolution",
+                other,
+                "expected quick, paper or smoke",
+            )),
+        }
+    }
+
     /// The same scene without its crack.
     pub fn uncracked(&self) -> SceneSpec {
         SceneSpec {

@@ -240,7 +240,29 @@ pub struct TrNews {
 }
 
 impl TrNewsSpec {
-    fn focus_duration_s(&self) -> f64 {
+    /// Shorter signals for the `smoke` scene: a 10 us chirp in 15 us, 20 us records and window.
+    pub fn smoke() -> TrNewsSpec {
+        TrNewsSpec {
+            chirp_s: 10e-6,
+            signal_s: 15e-6,
+            record_s: 20e-6,
+            window_s: 20e-6,
+            after_focus_s: 10e-6,
+            ..Default::default()
+        }
+    }
+
+    /// A preset by name: `smoke` for the smoke scene, the report's values otherwise.
+    pub fn preset(name: &str) -> TrNewsSpec {
+        if name == "smoke" {
+            Self::smoke()
+        } else {
+            Self::default()
+        }
+    }
+
+    /// Duration of a focusing run: the lag window plus the recording after the focus (s).
+    pub fn focus_duration_s(&self) -> f64 {
         self.window_s + self.after_focus_s
     }
 }
@@ -379,7 +401,9 @@ pub struct Delayed {
 }
 
 /// Delayed TR-NEWS for several (delays, amplitudes) points, simulated in parallel.
-/// The misfit window spans the focus times window_s + tau_i, widened by `half_window_s`.
+/// Delays are rounded to whole solver steps (at most dt/2, a few ns, off), so that source
+/// and prediction are shifted exactly and a linear scene's misfit is round-off. The misfit
+/// window spans the focus times window_s + tau_i, widened by `half_window_s`.
 pub fn delayed_tr_news(
     responder: &Responder,
     tr: &TrNews,
@@ -387,8 +411,13 @@ pub fn delayed_tr_news(
     points: &[(Vec<f64>, Vec<f64>)],
     half_window_s: f64,
 ) -> Result<Vec<Delayed>> {
+    let dt = responder.dt_s();
+    let points: Vec<(Vec<f64>, Vec<f64>)> = points
+        .iter()
+        .map(|(d, a)| (d.iter().map(|t| (t / dt).round() * dt).collect(), a.clone()))
+        .collect();
     let mut sources = Vec::with_capacity(points.len());
-    for (delays, amplitudes) in points {
+    for (delays, amplitudes) in &points {
         if let Some(&bad) = delays.iter().find(|d| !(d.is_finite() && **d >= 0.0)) {
             return Err(Error::invalid(
                 "delays_s",

@@ -1,52 +1,22 @@
 //! TR-NEWS, delayed TR-NEWS and pulse inversion on a small cracked / uncracked laminate.
 
 use std::sync::Arc;
-use trnews::laminate::StochasticSpec;
-use trnews::scene::{CrackSpec, LaminateSpec, ReceiverSpec, Scene, SceneSpec, TransmitterSpec};
+use trnews::scene::{Scene, SceneSpec};
 use trnews::signal::{self, Signal};
 use trnews::trnews::{delayed_tr_news, pulse_inversion, tr_news, Responder, TrNewsSpec};
 
-/// A 6 mm wide, 10-pair laminate (~2.4 mm), receivers 1..4 on top, the transmitter on the
-/// right edge, a 1.2 mm crack 0.8 mm deep under the middle.
+/// The smoke scene: a 6 mm wide, 10-pair laminate (~2.4 mm), receivers 1..4 on top, the
+/// transmitter on the right edge, a 1.2 mm crack 0.8 mm deep under the middle.
 fn small(cracked: bool) -> Arc<Scene> {
-    let spec = SceneSpec {
-        laminate: LaminateSpec::Stochastic(StochasticSpec {
-            pairs: 10,
-            ..Default::default()
-        }),
-        width_m: 6e-3,
-        element_size_x_m: 80e-6,
-        element_size_y_m: 40e-6,
-        transmitter: TransmitterSpec {
-            depth_top_m: 0.2e-3,
-            depth_bottom_m: 1.2e-3,
-            ..Default::default()
-        },
-        receivers: ReceiverSpec {
-            x_m: vec![1.5e-3, 2.5e-3, 3.5e-3, 4.5e-3],
-            ..Default::default()
-        },
-        crack: cracked.then(|| CrackSpec {
-            depth_m: 0.8e-3,
-            x_center_m: Some(3e-3),
-            length_m: 1.2e-3,
-            ..Default::default()
-        }),
-        ..Default::default()
-    };
-    Arc::new(Scene::build(&spec).unwrap())
+    let spec = SceneSpec::smoke();
+    Arc::new(Scene::build(&if cracked { spec } else { spec.uncracked() }).unwrap())
 }
 
 fn spec() -> TrNewsSpec {
     TrNewsSpec {
-        chirp_s: 10e-6,
-        signal_s: 15e-6,
-        record_s: 20e-6,
-        window_s: 20e-6,
-        after_focus_s: 10e-6,
         receivers: vec![3],
         pulse_inversion: true,
-        ..Default::default()
+        ..TrNewsSpec::smoke()
     }
 }
 

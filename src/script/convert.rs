@@ -118,6 +118,45 @@ where
     })
 }
 
+/// Deserialises `overrides` laid over `base`: nested maps merge field by field (unless they
+/// name a different `kind` of a tagged enum), any other value (including `()`, which clears
+/// an optional field) replaces the base's.
+pub fn overlay<T>(ctx: &NativeCallContext, overrides: Map, base: &T, what: &str) -> ScriptResult<T>
+where
+    T: DeserializeOwned + Serialize,
+{
+    let mut merged = serde_json::to_value(base).at(ctx)?;
+    merge(&mut merged, to_json(ctx, &Dynamic::from_map(overrides))?);
+    let map = rhai::serde::to_dynamic(&merged).map_err(|e| error(ctx, e))?;
+    options(ctx, map.cast::<Map>(), base, what)
+}
+
+fn merge(base: &mut serde_json::Value, over: serde_json::Value) {
+    match (base, over) {
+        (serde_json::Value::Object(b), serde_json::Value::Object(o)) => {
+            for (k, v) in o {
+                match b.get_mut(&k) {
+                    Some(slot) if slot.is_object() && v.is_object() && same_kind(slot, &v) => {
+                        merge(slot, v)
+                    }
+                    _ => {
+                        b.insert(k, v);
+                    }
+                }
+            }
+        }
+        (b, o) => *b = o,
+    }
+}
+
+/// True unless both values name a `kind` and the kinds differ.
+fn same_kind(a: &serde_json::Value, b: &serde_json::Value) -> bool {
+    match (a.get("kind"), b.get("kind")) {
+        (Some(x), Some(y)) => x == y,
+        _ => true,
+    }
+}
+
 /// The first field of `value` that fails to deserialise when put alone over `base`.
 fn bad_field<T>(value: &serde_json::Value, base: &T) -> Option<(String, String, String)>
 where

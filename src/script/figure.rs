@@ -13,17 +13,34 @@ pub fn module() -> Module {
 
 /// The output path under the host's output directory.
 fn output(ctx: &NativeCallContext, path: &str) -> ScriptResult<PathBuf> {
-    HostContext::of(ctx)?.resolve_output(path).map_err(|e| error(ctx, e))
+    HostContext::of(ctx)?
+        .resolve_output(path)
+        .map_err(|e| error(ctx, e))
 }
 
 /// Pairs [label, T] from an array of two-element arrays.
-fn labelled<T: Clone + 'static>(ctx: &NativeCallContext, list: &Array, what: &str) -> ScriptResult<Vec<(String, T)>> {
+fn labelled<T: Clone + 'static>(
+    ctx: &NativeCallContext,
+    list: &Array,
+    what: &str,
+) -> ScriptResult<Vec<(String, T)>> {
     list.iter()
         .enumerate()
         .map(|(i, item)| {
-            let pair = item.read_lock::<Array>().filter(|a| a.len() == 2).ok_or_else(|| error(ctx, format!("{what}[{i}] must be [label, value]")))?;
-            let label = pair[0].clone().into_string().map_err(|t| error(ctx, format!("{what}[{i}][0] must be a string, got {t}")))?;
-            let value = pair[1].read_lock::<T>().map(|v| v.clone()).ok_or_else(|| error(ctx, format!("{what}[{i}][1] has the wrong type {}", pair[1].type_name())))?;
+            let pair = item
+                .read_lock::<Array>()
+                .filter(|a| a.len() == 2)
+                .ok_or_else(|| error(ctx, format!("{what}[{i}] must be [label, value]")))?;
+            let label = pair[0]
+                .clone()
+                .into_string()
+                .map_err(|t| error(ctx, format!("{what}[{i}][0] must be a string, got {t}")))?;
+            let value = pair[1].read_lock::<T>().map(|v| v.clone()).ok_or_else(|| {
+                error(
+                    ctx,
+                    format!("{what}[{i}][1] has the wrong type {}", pair[1].type_name()),
+                )
+            })?;
             Ok((label, value))
         })
         .collect()
@@ -47,19 +64,38 @@ mod figure_api {
     #[rhai_fn(return_raw)]
     pub fn focusing(ctx: NativeCallContext, path: &str, title: &str, results: Array) -> Res<()> {
         let results = labelled::<TrNewsRef>(&ctx, &results, "results")?;
-        let refs: Vec<(&str, &crate::trnews::TrNews)> = results.iter().map(|(l, t)| (l.as_str(), t.as_ref())).collect();
+        let refs: Vec<(&str, &crate::trnews::TrNews)> = results
+            .iter()
+            .map(|(l, t)| (l.as_str(), t.as_ref()))
+            .collect();
         figures::focusing(&output(&ctx, path)?, title, &refs).at(&ctx)
     }
 
     /// Focused signals with their pulse-inversion sums per receiver (Fig. 16) and, in envelope_path, the PI envelopes (Fig. 17).
     #[rhai_fn(return_raw)]
-    pub fn pulse_inversion(ctx: NativeCallContext, path: &str, envelope_path: &str, tr: TrNewsRef) -> Res<()> {
-        figures::pulse_inversion(&output(&ctx, path)?, Some(&output(&ctx, envelope_path)?), &tr).at(&ctx)
+    pub fn pulse_inversion(
+        ctx: NativeCallContext,
+        path: &str,
+        envelope_path: &str,
+        tr: TrNewsRef,
+    ) -> Res<()> {
+        figures::pulse_inversion(
+            &output(&ctx, path)?,
+            Some(&output(&ctx, envelope_path)?),
+            &tr,
+        )
+        .at(&ctx)
     }
 
     /// Welch spectra in dB of [label, Signal] pairs up to max_mhz (Figs 20, 21).
     #[rhai_fn(return_raw)]
-    pub fn spectra(ctx: NativeCallContext, path: &str, title: &str, signals: Array, max_mhz: FLOAT) -> Res<()> {
+    pub fn spectra(
+        ctx: NativeCallContext,
+        path: &str,
+        title: &str,
+        signals: Array,
+        max_mhz: FLOAT,
+    ) -> Res<()> {
         let signals = labelled::<Signal>(&ctx, &signals, "signals")?;
         let refs: Vec<(&str, &Signal)> = signals.iter().map(|(l, s)| (l.as_str(), s)).collect();
         figures::spectra(&output(&ctx, path)?, title, &refs, max_mhz).at(&ctx)
@@ -73,9 +109,22 @@ mod figure_api {
 
     /// Snapshot `k` (1-based) of a run of `scene`: displacement component (0 = u_x, 1 = u_y) with layer interfaces and the crack (Fig. 19).
     #[rhai_fn(return_raw)]
-    pub fn snapshot(ctx: NativeCallContext, path: &str, scene: SceneRef, run: RunRef, k: INT, component: INT) -> Res<()> {
+    pub fn snapshot(
+        ctx: NativeCallContext,
+        path: &str,
+        scene: SceneRef,
+        run: RunRef,
+        k: INT,
+        component: INT,
+    ) -> Res<()> {
         let snap = &run.snapshots[index(&ctx, k, run.snapshots.len(), "snapshot")?];
-        figures::snapshot(&output(&ctx, path)?, &scene, snap, usize::from(component == 1)).at(&ctx)
+        figures::snapshot(
+            &output(&ctx, path)?,
+            &scene,
+            snap,
+            usize::from(component == 1),
+        )
+        .at(&ctx)
     }
 
     /// Error against run time on log-log axes from a work-precision study.

@@ -80,6 +80,27 @@ mod io_api {
         io::write_csv(&file, &header_refs, &column_refs).at(&ctx)
     }
 
+    /// Writes a table of rows (arrays of values, each written as text) as CSV under `headers`.
+    #[rhai_fn(return_raw)]
+    pub fn write_csv_rows(
+        ctx: NativeCallContext,
+        path: &str,
+        headers: Array,
+        table: Array,
+    ) -> Res<()> {
+        let file = HostContext::of(&ctx)?.resolve_output(path).at(&ctx)?;
+        let headers = strings(&ctx, &headers, "headers")?;
+        let table: Vec<Vec<String>> = table
+            .iter()
+            .map(|row| {
+                row.read_lock::<Array>()
+                    .map(|r| r.iter().map(|v| v.to_string()).collect())
+                    .unwrap_or_else(|| vec![row.to_string()])
+            })
+            .collect();
+        io::write_csv_rows(&file, &headers, &table).at(&ctx)
+    }
+
     /// Writes any value (maps, arrays, numbers, strings, Signals, Spectra) as pretty JSON.
     #[rhai_fn(return_raw)]
     pub fn write_json(ctx: NativeCallContext, path: &str, value: Dynamic) -> Res<()> {

@@ -2,7 +2,7 @@
 //! (a built scene) and `Run` (one run's traces, report, ledger, crack traces, snapshots).
 
 use crate::scene::{Scene, SceneSpec};
-use crate::script::convert::{error, options, ScriptResult, WithPosition};
+use crate::script::convert::{error, overlay, ScriptResult, WithPosition};
 use crate::solve::RunOutput;
 use rhai::plugin::*;
 use rhai::{Engine, Map, Module, NativeCallContext};
@@ -15,7 +15,9 @@ pub type RunRef = Arc<RunOutput>;
 
 /// Registers the display names of the custom types.
 pub fn register_types(engine: &mut Engine) {
-    engine.register_type_with_name::<SceneRef>("Scene").register_type_with_name::<RunRef>("Run");
+    engine
+        .register_type_with_name::<SceneRef>("Scene")
+        .register_type_with_name::<RunRef>("Run");
 }
 
 /// The `scene` module.
@@ -25,13 +27,17 @@ pub fn module() -> Module {
 
 /// Builds a scene from an override map over `base`.
 fn build(ctx: &NativeCallContext, overrides: Map, base: SceneSpec) -> ScriptResult<SceneRef> {
-    let spec: SceneSpec = options(ctx, overrides, &base, "scene")?;
+    let spec: SceneSpec = overlay(ctx, overrides, &base, "scene")?;
     Ok(Arc::new(Scene::build(&spec).at(ctx)?))
 }
 
 /// A 1-based index into `len` items, named `what` in errors.
 pub fn index(ctx: &NativeCallContext, k: rhai::INT, len: usize, what: &str) -> ScriptResult<usize> {
-    usize::try_from(k).ok().filter(|&k| k >= 1 && k <= len).map(|k| k - 1).ok_or_else(|| error(ctx, format!("{what} {k} does not exist (1..={len})")))
+    usize::try_from(k)
+        .ok()
+        .filter(|&k| k >= 1 && k <= len)
+        .map(|k| k - 1)
+        .ok_or_else(|| error(ctx, format!("{what} {k} does not exist (1..={len})")))
 }
 
 #[export_module]
@@ -57,16 +63,19 @@ mod scene_api {
         super::build(&ctx, overrides, SceneSpec::default())
     }
 
-    /// Builds the scene at the "paper" resolution (20 um x 10 um elements) with `overrides`.
+    /// Builds a preset scene, "quick" (the default), "paper" (20 um x 10 um elements) or "smoke" (a small fast scene for tests), with `overrides`.
     #[rhai_fn(return_raw)]
-    pub fn build_paper(ctx: NativeCallContext, overrides: Map) -> Res<SceneRef> {
-        super::build(&ctx, overrides, SceneSpec::paper())
+    pub fn preset(ctx: NativeCallContext, name: &str, overrides: Map) -> Res<SceneRef> {
+        let base = SceneSpec::preset(name).at(&ctx)?;
+        super::build(&ctx, overrides, base)
     }
 
     /// The same scene rebuilt without its crack (same laminate draw and mesh sizes).
     #[rhai_fn(global, pure, return_raw)]
     pub fn uncracked(ctx: NativeCallContext, scene: &mut SceneRef) -> Res<SceneRef> {
-        Ok(Arc::new(crate::scene::Scene::build(&scene.spec.uncracked()).at(&ctx)?))
+        Ok(Arc::new(
+            crate::scene::Scene::build(&scene.spec.uncracked()).at(&ctx)?,
+        ))
     }
 
     /// Degrees of freedom of the scene's model.
@@ -101,21 +110,37 @@ mod scene_api {
         m.insert("spec".into(), to_dynamic(&ctx, &scene.spec)?);
         m.insert("dofs".into(), (scene.model.dofs() as INT).into());
         m.insert("nodes".into(), (scene.model.mesh.nodes.len() as INT).into());
-        m.insert("elements".into(), (scene.model.mesh.triangles.len() as INT).into());
+        m.insert(
+            "elements".into(),
+            (scene.model.mesh.triangles.len() as INT).into(),
+        );
         m.insert("layers".into(), (scene.laminate.layers.len() as INT).into());
         m.insert("width_m".into(), (x1 - x0).into());
         m.insert("height_m".into(), (y1 - y0).into());
         m.insert("stability".into(), to_dynamic(&ctx, &scene.stability)?);
-        m.insert("clamped_epoxy_fraction".into(), scene.laminate.clamped_fraction().into());
-        m.insert("crack_pairs".into(), (scene.model.crack.as_ref().map_or(0, |c| c.pairs.len()) as INT).into());
+        m.insert(
+            "clamped_epoxy_fraction".into(),
+            scene.laminate.clamped_fraction().into(),
+        );
+        m.insert(
+            "crack_pairs".into(),
+            (scene.model.crack.as_ref().map_or(0, |c| c.pairs.len()) as INT).into(),
+        );
         Ok(m.into())
     }
 
     /// Transmits `traction` (Pa) from the transmitter with run options #{duration_s, dt_s, integrator, force, ledger_every, snapshot_every, record_crack, contact, progress}; returns the Run.
     #[rhai_fn(global, pure, return_raw)]
-    pub fn transmit(ctx: NativeCallContext, scene: &mut SceneRef, traction: Signal, run_options: Map) -> Res<RunRef> {
+    pub fn transmit(
+        ctx: NativeCallContext,
+        scene: &mut SceneRef,
+        traction: Signal,
+        run_options: Map,
+    ) -> Res<RunRef> {
         let o: TransmitOptions = options(&ctx, run_options, &TransmitOptions::default(), "run")?;
-        Ok(Arc::new(scene.transmit(&traction, &scene.config(&o)).at(&ctx)?))
+        Ok(Arc::new(
+            scene.transmit(&traction, &scene.config(&o)).at(&ctx)?,
+        ))
     }
 
     /// Traces of every receiver, in order (array of Signal).
@@ -151,14 +176,24 @@ mod scene_api {
     /// Normal gap g_N of crack pair `k` (1-based, ordered by x): > 0 is penetration (m).
     #[rhai_fn(global, pure, return_raw)]
     pub fn crack_gap(ctx: NativeCallContext, run: &mut RunRef, k: INT) -> Res<Signal> {
-        let c = run.crack.as_ref().ok_or_else(|| super::error(&ctx, "the run recorded no crack (set record_crack: true on a cracked scene)"))?;
+        let c = run.crack.as_ref().ok_or_else(|| {
+            super::error(
+                &ctx,
+                "the run recorded no crack (set record_crack: true on a cracked scene)",
+            )
+        })?;
         Ok(c.normal_gap[index(&ctx, k, c.normal_gap.len(), "crack pair")?].clone())
     }
 
     /// Vertical displacement of the upper crack face at pair `k` (1-based) (m).
     #[rhai_fn(global, pure, return_raw)]
     pub fn crack_upper(ctx: NativeCallContext, run: &mut RunRef, k: INT) -> Res<Signal> {
-        let c = run.crack.as_ref().ok_or_else(|| super::error(&ctx, "the run recorded no crack (set record_crack: true on a cracked scene)"))?;
+        let c = run.crack.as_ref().ok_or_else(|| {
+            super::error(
+                &ctx,
+                "the run recorded no crack (set record_crack: true on a cracked scene)",
+            )
+        })?;
         Ok(c.master_uy[index(&ctx, k, c.master_uy.len(), "crack pair")?].clone())
     }
 
@@ -176,14 +211,31 @@ mod scene_api {
 
     /// Writes snapshot `k` (1-based) of a run of `scene` as a VTU file for ParaView (displacement vector and material id).
     #[rhai_fn(global, return_raw)]
-    pub fn write_vtu(ctx: NativeCallContext, path: &str, scene: SceneRef, run: RunRef, k: INT) -> Res<()> {
+    pub fn write_vtu(
+        ctx: NativeCallContext,
+        path: &str,
+        scene: SceneRef,
+        run: RunRef,
+        k: INT,
+    ) -> Res<()> {
         let snap = &run.snapshots[index(&ctx, k, run.snapshots.len(), "snapshot")?];
-        let file = crate::script::HostContext::of(&ctx)?.resolve_output(path).map_err(|e| super::error(&ctx, e))?;
+        let file = crate::script::HostContext::of(&ctx)?
+            .resolve_output(path)
+            .map_err(|e| super::error(&ctx, e))?;
         let mesh = &scene.model.mesh;
         let mut material = vec![0.0; mesh.nodes.len()];
         for (t, &m) in mesh.triangles.iter().zip(&mesh.element_material) {
             t.iter().for_each(|&n| material[n] = m as f64);
         }
-        crate::io::write_vtu(&file, &mesh.nodes, &mesh.triangles, &[("displacement", 2, &snap.displacement), ("material", 1, &material)]).at(&ctx)
+        crate::io::write_vtu(
+            &file,
+            &mesh.nodes,
+            &mesh.triangles,
+            &[
+                ("displacement", 2, &snap.displacement),
+                ("material", 1, &material),
+            ],
+        )
+        .at(&ctx)
     }
 }

@@ -39,7 +39,8 @@ mod study_api {
     /// Runs the plane-P-wave work-precision study (explicit and Newmark over element sizes and steps) with options over the defaults.
     #[rhai_fn(return_raw)]
     pub fn work_precision(ctx: NativeCallContext, spec: Map) -> Res<WorkPrecision> {
-        let spec: WorkPrecisionSpec = options(&ctx, spec, &WorkPrecisionSpec::default(), "work_precision")?;
+        let spec: WorkPrecisionSpec =
+            options(&ctx, spec, &WorkPrecisionSpec::default(), "work_precision")?;
         Ok(Arc::new(crate::study::work_precision(&spec).at(&ctx)?))
     }
 
@@ -52,13 +53,37 @@ mod study_api {
     /// Writes the study as CSV: integrator, element size, dt, dt/dt_crit, DOFs, steps, error, run time, energy residual.
     #[rhai_fn(global, return_raw)]
     pub fn write_csv(ctx: NativeCallContext, wp: WorkPrecision, path: &str) -> Res<()> {
-        let file = HostContext::of(&ctx)?.resolve_output(path).map_err(|e| error(&ctx, e))?;
-        let headers: Vec<String> = ["integrator", "element_size_m", "dt_s", "dt_over_dt_crit", "dofs", "steps", "error", "run_time_s", "energy_residual_peak"].map(String::from).to_vec();
+        let file = HostContext::of(&ctx)?
+            .resolve_output(path)
+            .map_err(|e| error(&ctx, e))?;
+        let headers: Vec<String> = [
+            "integrator",
+            "element_size_m",
+            "dt_s",
+            "dt_over_dt_crit",
+            "dofs",
+            "steps",
+            "error",
+            "run_time_s",
+            "energy_residual_peak",
+        ]
+        .map(String::from)
+        .to_vec();
         let rows: Vec<Vec<String>> = wp
             .iter()
             .map(|p| {
                 let f = crate::io::fmt_f64;
-                vec![p.integrator.clone(), f(p.element_size_m), f(p.dt_s), f(p.stability_ratio), p.dofs.to_string(), p.report.steps.to_string(), f(p.error), f(p.run_time_s), f(p.report.energy_residual_peak)]
+                vec![
+                    p.integrator.clone(),
+                    f(p.element_size_m),
+                    f(p.dt_s),
+                    f(p.stability_ratio),
+                    p.dofs.to_string(),
+                    p.report.steps.to_string(),
+                    f(p.error),
+                    f(p.run_time_s),
+                    f(p.report.energy_residual_peak),
+                ]
             })
             .collect();
         crate::io::write_csv_rows(&file, &headers, &rows).at(&ctx)

@@ -29,9 +29,24 @@ fn points(ctx: &NativeCallContext, list: &Array) -> ScriptResult<Vec<(Vec<f64>, 
     list.iter()
         .enumerate()
         .map(|(i, p)| {
-            let map = p.read_lock::<Map>().ok_or_else(|| error(ctx, format!("points[{i}] must be a map #{{delays, amplitudes}}")))?;
-            let field = |name: &str| map.get(name).ok_or_else(|| error(ctx, format!("points[{i}] has no field '{name}'")));
-            Ok((floats(ctx, field("delays")?, &format!("points[{i}].delays"))?, floats(ctx, field("amplitudes")?, &format!("points[{i}].amplitudes"))?))
+            let map = p.read_lock::<Map>().ok_or_else(|| {
+                error(
+                    ctx,
+                    format!("points[{i}] must be a map #{{delays, amplitudes}}"),
+                )
+            })?;
+            let field = |name: &str| {
+                map.get(name)
+                    .ok_or_else(|| error(ctx, format!("points[{i}] has no field '{name}'")))
+            };
+            Ok((
+                floats(ctx, field("delays")?, &format!("points[{i}].delays"))?,
+                floats(
+                    ctx,
+                    field("amplitudes")?,
+                    &format!("points[{i}].amplitudes"),
+                )?,
+            ))
         })
         .collect()
 }
@@ -54,6 +69,19 @@ mod trnews_api {
         to_dynamic(&ctx, &TrNewsSpec::default())
     }
 
+    /// TR-NEWS parameters of a preset: "smoke" (10 us chirp, 20 us window) or the report's for any other name.
+    #[rhai_fn(return_raw)]
+    pub fn preset_spec(ctx: NativeCallContext, name: &str) -> Res<Dynamic> {
+        to_dynamic(&ctx, &TrNewsSpec::preset(name))
+    }
+
+    /// Duration of a focusing run for a TR-NEWS spec map: window_s + after_focus_s (s).
+    #[rhai_fn(return_raw)]
+    pub fn focus_duration(ctx: NativeCallContext, spec: Map) -> Res<FLOAT> {
+        let spec: TrNewsSpec = options(&ctx, spec, &TrNewsSpec::default(), "tr_news")?;
+        Ok(spec.focus_duration_s())
+    }
+
     /// A responder for `scene`: a linear scene runs its impulse response once over `duration_s` and convolves afterwards; a cracked one simulates every transmission.
     #[rhai_fn(return_raw)]
     pub fn responder(ctx: NativeCallContext, scene: SceneRef, duration_s: FLOAT) -> Res<Responder> {
@@ -74,16 +102,34 @@ mod trnews_api {
     /// Report of the impulse-response run, or () when the responder simulates.
     #[rhai_fn(global, get = "impulse_report", pure, return_raw)]
     pub fn impulse_report(ctx: NativeCallContext, r: &mut Responder) -> Res<Dynamic> {
-        r.impulse_report().map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))
+        r.impulse_report()
+            .map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))
     }
 
     /// Receivers' responses to `traction` (Pa) over `duration_s`: #{traces: [Signal], report: map or ()}.
     #[rhai_fn(global, pure, return_raw)]
-    pub fn respond(ctx: NativeCallContext, r: &mut Responder, traction: Signal, duration_s: FLOAT) -> Res<Dynamic> {
+    pub fn respond(
+        ctx: NativeCallContext,
+        r: &mut Responder,
+        traction: Signal,
+        duration_s: FLOAT,
+    ) -> Res<Dynamic> {
         let out = r.respond(&traction, duration_s).at(&ctx)?;
         let mut m = Map::new();
-        m.insert("traces".into(), out.traces.into_iter().map(Dynamic::from).collect::<Array>().into());
-        m.insert("report".into(), out.report.as_ref().map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))?);
+        m.insert(
+            "traces".into(),
+            out.traces
+                .into_iter()
+                .map(Dynamic::from)
+                .collect::<Array>()
+                .into(),
+        );
+        m.insert(
+            "report".into(),
+            out.report
+                .as_ref()
+                .map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))?,
+        );
         Ok(m.into())
     }
 
@@ -109,19 +155,33 @@ mod trnews_api {
     /// Report of the chirp run, or () when convolved.
     #[rhai_fn(global, get = "chirp_report", pure, return_raw)]
     pub fn chirp_report(ctx: NativeCallContext, tr: &mut TrNewsRef) -> Res<Dynamic> {
-        tr.chirp_report.as_ref().map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))
+        tr.chirp_report
+            .as_ref()
+            .map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))
     }
 
     /// The focusing at receiver `k` (1-based receiver number; it must have been focused).
     #[rhai_fn(global, pure, return_raw)]
     pub fn focus(ctx: NativeCallContext, tr: &mut TrNewsRef, k: INT) -> Res<Focus> {
-        tr.focus.iter().find(|f| f.receiver as INT == k).cloned().ok_or_else(|| super::error(&ctx, format!("receiver {k} was not focused (options.receivers)")))
+        tr.focus
+            .iter()
+            .find(|f| f.receiver as INT == k)
+            .cloned()
+            .ok_or_else(|| {
+                super::error(
+                    &ctx,
+                    format!("receiver {k} was not focused (options.receivers)"),
+                )
+            })
     }
 
     /// Receiver numbers that were focused.
     #[rhai_fn(global, get = "receivers", pure)]
     pub fn receivers(tr: &mut TrNewsRef) -> Array {
-        tr.focus.iter().map(|f| Dynamic::from(f.receiver as INT)).collect()
+        tr.focus
+            .iter()
+            .map(|f| Dynamic::from(f.receiver as INT))
+            .collect()
     }
 
     /// The focused signal y_TR at the receiver.
@@ -168,8 +228,19 @@ mod trnews_api {
 
     /// Delayed TR-NEWS at receiver `k` for points [#{delays: [s...], amplitudes: [...]}]: simulations (in parallel) vs linear predictions; misfit over the focus window widened by half_window_s.
     #[rhai_fn(global, return_raw)]
-    pub fn delayed(ctx: NativeCallContext, r: Responder, tr: TrNewsRef, k: INT, list: Array, half_window_s: FLOAT) -> Res<Array> {
-        let focus = tr.focus.iter().find(|f| f.receiver as INT == k).ok_or_else(|| super::error(&ctx, format!("receiver {k} was not focused")))?;
+    pub fn delayed(
+        ctx: NativeCallContext,
+        r: Responder,
+        tr: TrNewsRef,
+        k: INT,
+        list: Array,
+        half_window_s: FLOAT,
+    ) -> Res<Array> {
+        let focus = tr
+            .focus
+            .iter()
+            .find(|f| f.receiver as INT == k)
+            .ok_or_else(|| super::error(&ctx, format!("receiver {k} was not focused")))?;
         let points = points(&ctx, &list)?;
         let results = delayed_tr_news(&r, &tr, focus, &points, half_window_s).at(&ctx)?;
         Ok(results.into_iter().map(Dynamic::from).collect())
@@ -207,16 +278,31 @@ mod trnews_api {
         m.insert("amplitudes".into(), to_dynamic(&ctx, &d.amplitudes)?);
         m.insert("misfit".into(), d.misfit.into());
         m.insert("peak_difference".into(), d.peak_difference.into());
-        m.insert("window_s".into(), to_dynamic(&ctx, &[d.window_s.0, d.window_s.1])?);
-        m.insert("report".into(), d.report.as_ref().map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))?);
+        m.insert(
+            "window_s".into(),
+            to_dynamic(&ctx, &[d.window_s.0, d.window_s.1])?,
+        );
+        m.insert(
+            "report".into(),
+            d.report
+                .as_ref()
+                .map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))?,
+        );
         Ok(m.into())
     }
 
     /// Pulse inversion of `traction`: #{positive: [Signal], negative: [Signal], sum: [Signal], reports: [map]} per receiver.
     #[rhai_fn(global, return_raw)]
-    pub fn pulse_inversion(ctx: NativeCallContext, r: Responder, traction: Signal, duration_s: FLOAT) -> Res<Dynamic> {
+    pub fn pulse_inversion(
+        ctx: NativeCallContext,
+        r: Responder,
+        traction: Signal,
+        duration_s: FLOAT,
+    ) -> Res<Dynamic> {
         let pi = crate::trnews::pulse_inversion(&r, &traction, duration_s).at(&ctx)?;
-        let list = |v: Vec<Signal>| -> Dynamic { v.into_iter().map(Dynamic::from).collect::<Array>().into() };
+        let list = |v: Vec<Signal>| -> Dynamic {
+            v.into_iter().map(Dynamic::from).collect::<Array>().into()
+        };
         let mut m = Map::new();
         m.insert("reports".into(), to_dynamic(&ctx, &pi.reports)?);
         m.insert("positive".into(), list(pi.positive));
