@@ -1,0 +1,66 @@
+//! Every experiment script in scripts/ runs end to end at the `smoke` resolution (a small
+//! scene, seconds per run) and writes its figures and tables: the scripts are regression
+//! tests of the whole pipeline, scene -> runs -> TR-NEWS -> figures.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn scripts() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts");
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "rhai"))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
+    let scripts = scripts();
+    assert!(scripts.len() >= 6, "{scripts:?}");
+    let out = std::env::temp_dir().join(format!("trnews-experiments-{}", std::process::id()));
+    let mut failures = Vec::new();
+    for script in &scripts {
+        let result = Command::new(env!("CARGO_BIN_EXE_trnews-script"))
+            .arg(script)
+            .args(["--set", "resolution=smoke", "--quiet", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        if !result.status.success() {
+            failures.push(format!(
+                "{}: {}",
+                script.display(),
+                String::from_utf8_lossy(&result.stderr)
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    for file in [
+        "sweep_delays_fig22.png",
+        "sweep_delays_misfit_cracked.png",
+        "sweep_delays.csv",
+        "trnews_focus.png",
+        "trnews_snapshot.png",
+        "trnews_snapshot.vtu",
+        "pulse_inversion.png",
+        "pulse_inversion_envelopes.png",
+        "spectra_input_output.png",
+        "spectra_defect.png",
+        "work_precision.png",
+        "work_precision.csv",
+        "stability.csv",
+    ] {
+        let path = out.join("plots").join(file);
+        let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(bytes.len() > 100, "{} is nearly empty", path.display());
+    }
+    let table = std::fs::read_to_string(out.join("plots/stability.csv")).unwrap();
+    assert!(
+        table.contains("refused") && table.contains("stopped: unstable") && table.contains("ran"),
+        "{table}"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
