@@ -502,7 +502,7 @@ pub struct TransmitOptions {
     pub record_crack: bool,
     /// Override the scene's contact options for this run (`None` keeps the scene's).
     pub contact: Option<ContactOptions>,
-    /// Show a progress bar on a terminal.
+    /// Show a progress bar on a terminal (unless progress is off globally, e.g. `--quiet`).
     pub progress: bool,
 }
 
@@ -517,7 +517,7 @@ impl Default for TransmitOptions {
             snapshot_every: None,
             record_crack: false,
             contact: None,
-            progress: false,
+            progress: true,
         }
     }
 }
@@ -533,7 +533,7 @@ impl Scene {
             snapshot_every: options.snapshot_every,
             record_crack: options.record_crack,
             contact: options.contact.or(self.contact),
-            progress: options.progress,
+            progress: options.progress && RunConfig::default().progress,
             ..self.run_config(options.duration_s)
         }
     }

@@ -207,7 +207,7 @@ impl HostContext {
             .as_deref()
             .and_then(Option::as_ref)
         {
-            Some(bar) => bar.suspend(|| eprintln!("{line}")),
+            Some(_) => crate::solve::progress_group().suspend(|| eprintln!("{line}")),
             None => eprintln!("{line}"),
         }
     }
@@ -220,7 +220,9 @@ impl HostContext {
         if self.quiet {
             return;
         }
-        let bar = indicatif::ProgressBar::new_spinner().with_message(format!("running {script}"));
+        let spinner =
+            indicatif::ProgressBar::new_spinner().with_message(format!("running {script}"));
+        let bar = crate::solve::progress_group().add(spinner);
         bar.enable_steady_tick(Duration::from_millis(200));
         if let Ok(mut p) = self.progress.write() {
             *p = Some(bar);
@@ -254,6 +256,7 @@ impl Host {
                 format!("cannot create output directory: {e}"),
             )
         })?;
+        crate::solve::show_progress(!options.quiet);
         let context = Arc::new(HostContext {
             out_dir: options.out_dir,
             params: options.params,

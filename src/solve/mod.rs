@@ -87,7 +87,7 @@ pub struct RunConfig {
     pub initial_displacement: Option<Vec<f64>>,
     /// Initial velocity, zero if `None`.
     pub initial_velocity: Option<Vec<f64>>,
-    /// Show a progress bar on a terminal.
+    /// Show a progress bar on a terminal (default: on unless [`show_progress`] turned it off).
     pub progress: bool,
     /// A precomputed stability estimate for this model, to skip the power iteration.
     pub stability: Option<StabilityEstimate>,
@@ -107,7 +107,7 @@ impl Default for RunConfig {
             contact: None,
             initial_displacement: None,
             initial_velocity: None,
-            progress: false,
+            progress: SHOW_PROGRESS.load(std::sync::atomic::Ordering::Relaxed),
             stability: None,
         }
     }
@@ -375,13 +375,28 @@ pub fn segment_receiver(
     })
 }
 
+/// Whether runs show progress bars by default (the CLI's `--quiet` turns this off).
+static SHOW_PROGRESS: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
+
+/// Turns the default progress display of runs on or off.
+pub fn show_progress(on: bool) {
+    SHOW_PROGRESS.store(on, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// The progress display all bars belong to, so parallel runs (and a host's spinner) share
+/// the terminal instead of overwriting each other's lines.
+pub fn progress_group() -> &'static indicatif::MultiProgress {
+    static GROUP: std::sync::OnceLock<indicatif::MultiProgress> = std::sync::OnceLock::new();
+    GROUP.get_or_init(indicatif::MultiProgress::new)
+}
+
 /// A progress bar on stderr when `show` and stderr is a terminal; hidden otherwise.
 fn progress_bar(show: bool, steps: usize) -> indicatif::ProgressBar {
     use std::io::IsTerminal;
     if !show || !std::io::stderr().is_terminal() {
         return indicatif::ProgressBar::hidden();
     }
-    let bar = indicatif::ProgressBar::new(steps as u64);
+    let bar = progress_group().add(indicatif::ProgressBar::new(steps as u64));
     if let Ok(style) = indicatif::ProgressStyle::with_template(
         "{elapsed_precise} [{bar:40}] {pos}/{len} steps ({eta} left)",
     ) {
