@@ -551,6 +551,9 @@ fn script_type(rust: &str) -> String {
         "Dynamic" => "any",
         "Map" => "map",
         "Array" => "array",
+        "SceneRef" => "Scene",
+        "RunRef" => "Run",
+        "TrNewsRef" => "TrNews",
         other => other,
     }
     .to_string()
