@@ -2,11 +2,13 @@
 //! (report Sec. 4.4-4.7).
 
 pub mod element;
+pub mod operator;
 pub mod sparse;
 
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::mesh::{Crack, Mesh, Side};
+pub use operator::StiffnessOperator;
 pub use sparse::BlockCsr;
 
 /// The discrete model the integrators run: only what the scene asked for exists.
@@ -82,17 +84,17 @@ fn material_of<'a>(mesh: &Mesh, materials: &'a [Material], e: usize) -> Result<&
     })
 }
 
-/// Assembles the global stiffness K = sum_e A_e B_e^T C_e B_e (report Sec. 4.7).
+/// Assembles the global stiffness K = sum_e A_e B_e^T C_e B_e (report Sec. 4.7), row by row
+/// in parallel (each block sums its element contributions in element order).
 pub fn assemble_stiffness(mesh: &Mesh, materials: &[Material]) -> Result<BlockCsr> {
-    let mut k = BlockCsr::pattern(mesh.nodes.len(), &mesh.triangles);
-    for (e, &t) in mesh.triangles.iter().enumerate() {
-        let m = material_of(mesh, materials, e)?;
-        k.add_element(
-            t,
-            &element::stiffness(element_nodes(mesh, t), &m.stiffness_pa),
-        );
-    }
-    Ok(k)
+    let mats = (0..mesh.triangles.len())
+        .map(|e| material_of(mesh, materials, e).map(|m| &m.stiffness_pa))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(BlockCsr::assemble_rows(
+        mesh.nodes.len(),
+        &mesh.triangles,
+        |e, a| element::stiffness_row(element_nodes(mesh, mesh.triangles[e]), mats[e], a),
+    ))
 }
 
 /// Assembles the consistent mass matrix (report Sec. 4.4), for Newmark verification runs.

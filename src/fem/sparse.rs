@@ -65,6 +65,99 @@ impl BlockCsr {
         }
     }
 
+    /// Assembles a matrix with the sparsity of a triangle mesh row by row, in parallel:
+    /// `row_blocks(e, a)` returns the 2x2 blocks (row-major) coupling local node `a` of
+    /// element `e` to its local nodes 0, 1, 2. Each block (r, c) is the sum of its element
+    /// contributions in element order, as sequential element-by-element assembly gives.
+    pub fn assemble_rows(
+        nodes: usize,
+        triangles: &[[usize; 3]],
+        row_blocks: impl Fn(usize, usize) -> [[f64; 4]; 3] + Sync,
+    ) -> BlockCsr {
+        // Elements around each node, in element order: (element, local index).
+        let mut start = vec![0usize; nodes + 1];
+        for t in triangles {
+            for &a in t {
+                start[a + 1] += 1;
+            }
+        }
+        for i in 0..nodes {
+            start[i + 1] += start[i];
+        }
+        let mut around = vec![(0u32, 0u8); start[nodes]];
+        let mut fill = start.clone();
+        for (e, t) in triangles.iter().enumerate() {
+            for (a, &n) in t.iter().enumerate() {
+                around[fill[n]] = (e as u32, a as u8);
+                fill[n] += 1;
+            }
+        }
+        drop(fill);
+        assert!(triangles.len() <= u32::MAX as usize, "too many elements");
+        // Sorted, deduplicated neighbour columns of node r into `buf`; returns their number.
+        let columns = |r: usize, buf: &mut Vec<u32>| {
+            buf.clear();
+            for &(e, _) in &around[start[r]..start[r + 1]] {
+                buf.extend(triangles[e as usize].iter().map(|&c| c as u32));
+            }
+            buf.sort_unstable();
+            buf.dedup();
+            buf.len()
+        };
+        let mut row_ptr: Vec<usize> = Vec::with_capacity(nodes + 1);
+        row_ptr.push(0);
+        let lengths: Vec<usize> = (0..nodes)
+            .into_par_iter()
+            .map_init(Vec::new, |buf, r| columns(r, buf))
+            .collect();
+        for l in lengths {
+            row_ptr.push(row_ptr.last().unwrap() + l);
+        }
+        let nnz = row_ptr[nodes];
+        let mut cols = vec![0u32; nnz];
+        let mut blocks = vec![[0.0f64; 4]; nnz];
+        // Split the outputs into per-task row ranges, then fill them in parallel.
+        let mut tasks = Vec::with_capacity(nodes / ROWS_PER_TASK + 1);
+        let (mut c_rest, mut b_rest) = (&mut cols[..], &mut blocks[..]);
+        for r0 in (0..nodes).step_by(ROWS_PER_TASK) {
+            let r1 = (r0 + ROWS_PER_TASK).min(nodes);
+            let len = row_ptr[r1] - row_ptr[r0];
+            let (c, cr) = std::mem::take(&mut c_rest).split_at_mut(len);
+            let (b, br) = std::mem::take(&mut b_rest).split_at_mut(len);
+            (c_rest, b_rest) = (cr, br);
+            tasks.push((r0, r1, c, b));
+        }
+        tasks.into_par_iter().for_each(|(r0, r1, c, b)| {
+            let mut buf = Vec::new();
+            let base = row_ptr[r0];
+            for r in r0..r1 {
+                let range = row_ptr[r] - base..row_ptr[r + 1] - base;
+                columns(r, &mut buf);
+                let (rc, rb) = (&mut c[range.clone()], &mut b[range]);
+                rc.copy_from_slice(&buf);
+                for &(e, a) in &around[start[r]..start[r + 1]] {
+                    let t = triangles[e as usize];
+                    let k = row_blocks(e as usize, a as usize);
+                    for (&n, kb) in t.iter().zip(&k) {
+                        let p = rc
+                            .iter()
+                            .position(|&x| x as usize == n)
+                            .expect("column in the row pattern");
+                        let blk = &mut rb[p];
+                        for (v, w) in blk.iter_mut().zip(kb) {
+                            *v += w;
+                        }
+                    }
+                }
+            }
+        });
+        BlockCsr {
+            row_ptr,
+            cols,
+            blocks,
+        }
+    }
+
     /// Number of node rows.
     pub fn nodes(&self) -> usize {
         self.row_ptr.len() - 1

@@ -1,6 +1,6 @@
 //! Critical time step of the explicit scheme: dt_crit = 2 / omega_max (report Sec. 4.8.2).
 
-use crate::fem::{element, Model};
+use crate::fem::{element, Model, StiffnessOperator};
 use serde::Serialize;
 
 /// Two estimates of the explicit stability limit.
@@ -54,6 +54,7 @@ fn element_bound(model: &Model) -> f64 {
 /// Rayleigh quotient (an estimate of omega_max^2 from below) and the iterations used.
 fn power_iteration(model: &Model) -> (f64, usize) {
     let n = model.dofs();
+    let op = StiffnessOperator::new(model);
     let inv_sqrt_m: Vec<f64> = model.lumped_mass.iter().map(|m| 1.0 / m.sqrt()).collect();
     let mut free = vec![true; n];
     for &d in &model.fixed_dofs {
@@ -81,7 +82,7 @@ fn power_iteration(model: &Model) -> (f64, usize) {
         for i in 0..n {
             scaled[i] = x[i] * inv_sqrt_m[i];
         }
-        model.stiffness.mul(&scaled, &mut y);
+        op.mul(&scaled, &mut y);
         for i in 0..n {
             y[i] = if free[i] { y[i] * inv_sqrt_m[i] } else { 0.0 };
         }
