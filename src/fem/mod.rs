@@ -87,13 +87,20 @@ fn material_of<'a>(mesh: &Mesh, materials: &'a [Material], e: usize) -> Result<&
 /// Assembles the global stiffness K = sum_e A_e B_e^T C_e B_e (report Sec. 4.7), row by row
 /// in parallel (each block sums its element contributions in element order).
 pub fn assemble_stiffness(mesh: &Mesh, materials: &[Material]) -> Result<BlockCsr> {
-    let mats = (0..mesh.triangles.len())
-        .map(|e| material_of(mesh, materials, e).map(|m| &m.stiffness_pa))
-        .collect::<Result<Vec<_>>>()?;
+    if let Some(e) = mesh
+        .element_material
+        .iter()
+        .position(|&id| id >= materials.len())
+    {
+        material_of(mesh, materials, e)?;
+    }
     Ok(BlockCsr::assemble_rows(
         mesh.nodes.len(),
         &mesh.triangles,
-        |e, a| element::stiffness_row(element_nodes(mesh, mesh.triangles[e]), mats[e], a),
+        |e, a| {
+            let c = &materials[mesh.element_material[e]].stiffness_pa;
+            element::stiffness_row(element_nodes(mesh, mesh.triangles[e]), c, a)
+        },
     ))
 }
 

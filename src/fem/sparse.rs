@@ -104,14 +104,13 @@ impl BlockCsr {
             buf.dedup();
             buf.len()
         };
-        let mut row_ptr: Vec<usize> = Vec::with_capacity(nodes + 1);
-        row_ptr.push(0);
-        let lengths: Vec<usize> = (0..nodes)
-            .into_par_iter()
-            .map_init(Vec::new, |buf, r| columns(r, buf))
-            .collect();
-        for l in lengths {
-            row_ptr.push(row_ptr.last().unwrap() + l);
+        let mut row_ptr = vec![0usize; nodes + 1];
+        row_ptr[1..]
+            .par_iter_mut()
+            .enumerate()
+            .for_each_init(Vec::new, |buf, (r, len)| *len = columns(r, buf));
+        for r in 0..nodes {
+            row_ptr[r + 1] += row_ptr[r];
         }
         let nnz = row_ptr[nodes];
         let mut cols = vec![0u32; nnz];
