@@ -126,28 +126,33 @@ impl BlockCsr {
             (c_rest, b_rest) = (cr, br);
             tasks.push((r0, r1, c, b));
         }
+        // Each row is summed in a small local buffer and written once: the first touch of
+        // the freshly allocated (lazily zeroed) output is then a write, not a read followed
+        // by a write, which would cost a copy-on-write page fault and a TLB shootdown on
+        // the other threads (measured: 2 threads slower than 1 at 1M DOFs without this).
         tasks.into_par_iter().for_each(|(r0, r1, c, b)| {
-            let mut buf = Vec::new();
+            let (mut buf, mut acc) = (Vec::new(), Vec::new());
             let base = row_ptr[r0];
             for r in r0..r1 {
                 let range = row_ptr[r] - base..row_ptr[r + 1] - base;
                 columns(r, &mut buf);
-                let (rc, rb) = (&mut c[range.clone()], &mut b[range]);
-                rc.copy_from_slice(&buf);
+                acc.clear();
+                acc.resize(buf.len(), [0.0f64; 4]);
                 for &(e, a) in &around[start[r]..start[r + 1]] {
                     let t = triangles[e as usize];
                     let k = row_blocks(e as usize, a as usize);
                     for (&n, kb) in t.iter().zip(&k) {
-                        let p = rc
+                        let p = buf
                             .iter()
                             .position(|&x| x as usize == n)
                             .expect("column in the row pattern");
-                        let blk = &mut rb[p];
-                        for (v, w) in blk.iter_mut().zip(kb) {
+                        for (v, w) in acc[p].iter_mut().zip(kb) {
                             *v += w;
                         }
                     }
                 }
+                c[range.clone()].copy_from_slice(&buf);
+                b[range].copy_from_slice(&acc);
             }
         });
         BlockCsr {
