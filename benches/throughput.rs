@@ -1,1 +1,530 @@
-fn main() {}
+//! Throughput benchmark: assembly time, explicit-step cost per DOF, crack overhead and the
+//! machine's memory bandwidth (STREAM-like triad), as a table and as JSON.
+//!
+//! ```text
+//! cargo bench --bench throughput            # full run (a few minutes)
+//! cargo bench --bench throughput -- --quick # CI smoke run (seconds)
+//! ```
+//! JSON goes to `$CARGO_TARGET_DIR/bench/throughput.json` (default `target/bench/`).
+//!
+//! Scenes: the default stochastic CFRP laminate (~100 layers, ~11.5 mm thick), 16 mm wide,
+//! absorbing bottom and left edges, fixed bottom corners, element aspect hx = 1.5 hy like the
+//! default scene, with the element size chosen to hit each DOF count.
+
+use rayon::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+use trnews::contact::ContactOptions;
+use trnews::fem::{element, Model, StiffnessOperator};
+use trnews::laminate::{Laminate, StochasticSpec};
+use trnews::material::{Material, Plane};
+use trnews::mesh::{Mesh, Side};
+use trnews::signal::Signal;
+use trnews::solve::{
+    self, segment_receiver, traction_source, Quantity, RunConfig, Source, StabilityEstimate,
+};
+
+const WIDTH_M: f64 = 16e-3;
+const ASPECT: f64 = 1.5;
+
+#[derive(Serialize)]
+struct AssemblyRow {
+    target_dofs: usize,
+    dofs: usize,
+    hx_m: f64,
+    hy_m: f64,
+    best_ms: f64,
+    reps: usize,
+}
+
+#[derive(Serialize)]
+struct StepRow {
+    target_dofs: usize,
+    dofs: usize,
+    threads: usize,
+    steps: usize,
+    best_ns_per_dof_step: f64,
+    /// The fused kernel alone (StiffnessOperator::explicit_update), same steps.
+    kernel_ns_per_dof_step: f64,
+    best_ms_per_step: f64,
+    reps: usize,
+}
+
+#[derive(Serialize)]
+struct CrackRow {
+    dofs_cracked: usize,
+    dofs_uncracked: usize,
+    threads: usize,
+    steps: usize,
+    cracked_ns_per_dof_step: f64,
+    uncracked_ns_per_dof_step: f64,
+    cracked_ms_per_step: f64,
+    uncracked_ms_per_step: f64,
+    overhead_percent: f64,
+    crack_pairs: usize,
+    steps_in_contact: usize,
+    max_pairs_slipping: u32,
+}
+
+#[derive(Serialize)]
+struct Bandwidth {
+    threads: usize,
+    triad_gb_s: f64,
+    array_mb: f64,
+}
+
+#[derive(Serialize)]
+struct Report {
+    quick: bool,
+    rayon_threads_available: usize,
+    assembly: Vec<AssemblyRow>,
+    step: Vec<StepRow>,
+    crack: Vec<CrackRow>,
+    bandwidth: Vec<Bandwidth>,
+}
+
+fn laminate() -> Laminate {
+    Laminate::stochastic(&StochasticSpec::default(), Plane::Strain).expect("default laminate")
+}
+
+/// Grid lines of [lo, hi] split at `breaks` into pieces no longer than h (the mesh's rule).
+fn lines(breaks: &[f64], h: f64) -> usize {
+    1 + breaks
+        .windows(2)
+        .map(|w| ((w[1] - w[0]) / h).ceil().max(1.0) as usize)
+        .sum::<usize>()
+}
+
+/// DOFs of the uncracked layered mesh with rows of height hy and columns of 1.5 hy.
+fn dofs_for(interfaces: &[f64], hy: f64) -> usize {
+    2 * lines(&[0.0, WIDTH_M], ASPECT * hy) * lines(interfaces, hy)
+}
+
+/// Element height whose mesh has about `target` DOFs (bisection on the line counts).
+fn hy_for(interfaces: &[f64], target: usize) -> f64 {
+    let (mut lo, mut hi): (f64, f64) = (1e-7, 1e-3);
+    for _ in 0..60 {
+        let mid = (lo * hi).sqrt();
+        if dofs_for(interfaces, mid) > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let (dl, dh) = (dofs_for(interfaces, lo), dofs_for(interfaces, hi));
+    if dl.abs_diff(target) < dh.abs_diff(target) {
+        lo
+    } else {
+        hi
+    }
+}
+
+fn fixed_corners(mesh: &Mesh) -> Vec<usize> {
+    let bottom = mesh.side_nodes(Side::Bottom);
+    [bottom[0], *bottom.last().unwrap()]
+        .into_iter()
+        .flat_map(|n| [2 * n, 2 * n + 1])
+        .collect()
+}
+
+fn build_model(lam: &Laminate, mesh: Mesh) -> Model {
+    let fixed = fixed_corners(&mesh);
+    let crack = None;
+    Model::build(
+        mesh,
+        lam.materials.clone(),
+        &[Side::Bottom, Side::Left],
+        fixed,
+        crack,
+    )
+    .expect("model")
+}
+
+/// The guaranteed element bound of the explicit step (cheap; avoids the power iteration).
+fn element_dt_bound(model: &Model) -> f64 {
+    let mesh = &model.mesh;
+    let omega2 = mesh
+        .triangles
+        .par_iter()
+        .enumerate()
+        .map(|(e, &t)| {
+            let m: &Material = &model.materials[mesh.element_material[e]];
+            let k = element::stiffness(t.map(|n| mesh.nodes[n]), &m.stiffness_pa);
+            element::omega_squared_bound(
+                &k,
+                element::lumped_mass(0.5 * mesh.twice_area(t), m.density_kg_m3),
+            )
+        })
+        .reduce(|| 0.0, f64::max);
+    2.0 / omega2.sqrt()
+}
+
+fn chirp_signal(dt: f64, steps: usize, amplitude: f64) -> Signal {
+    let (f0, f1, t1) = (0.2e6, 2e6, 30e-6);
+    let samples = (0..steps + 1)
+        .map(|k| {
+            let t = k as f64 * dt;
+            let psi = 2.0 * std::f64::consts::PI * (f0 * t + (f1 - f0) * t * t / (2.0 * t1));
+            amplitude * psi.sin()
+        })
+        .collect();
+    Signal {
+        dt_s: dt,
+        t0_s: 0.0,
+        samples,
+    }
+}
+
+/// Times `steps` explicit steps of `model` (the real `solve::run`, ledger every 20 steps
+/// as by default) and returns the time-loop wall time per step (s) and the run output.
+fn timed_run(
+    model: &Model,
+    sources: &[Source],
+    receivers: &[solve::Receiver],
+    dt: f64,
+    steps: usize,
+    contact: Option<ContactOptions>,
+) -> (f64, solve::RunOutput) {
+    let config = RunConfig {
+        dt_s: Some(dt),
+        duration_s: steps as f64 * dt,
+        contact,
+        stability: Some(StabilityEstimate {
+            dt_crit_s: dt / 0.9,
+            dt_element_bound_s: dt / 0.9,
+            iterations: 0,
+        }),
+        ..Default::default()
+    };
+    let out = solve::run(model, sources, receivers, &config).expect("run");
+    (out.report.wall_time_s / out.report.steps as f64, out)
+}
+
+/// Best time per step (s) of the fused step kernel alone on a smooth random-ish field.
+fn kernel_time(model: &Model, dt: f64, steps: usize, reps: usize) -> f64 {
+    let op = StiffnessOperator::new(model);
+    let n = model.dofs();
+    let a: Vec<f64> = model.lumped_mass.iter().map(|m| dt * dt / m).collect();
+    let mut u: Vec<f64> = (0..n).map(|i| 1e-9 * ((i % 97) as f64 - 48.0)).collect();
+    let mut u_prev = u.clone();
+    let mut u_next = vec![0.0; n];
+    let mut best = f64::INFINITY;
+    for r in 0..=reps {
+        let t = Instant::now();
+        for _ in 0..steps {
+            op.explicit_update(&a, &u_prev, &u, &mut u_next);
+            std::mem::swap(&mut u_prev, &mut u);
+            std::mem::swap(&mut u, &mut u_next);
+        }
+        if r > 0 {
+            best = best.min(t.elapsed().as_secs_f64() / steps as f64);
+        }
+    }
+    std::hint::black_box(&u);
+    best
+}
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool")
+}
+
+/// Best of `reps` STREAM triad a = b + s c over arrays of `n` doubles, counting 24 bytes per
+/// element (the STREAM convention, without write-allocate traffic).
+fn triad(n: usize, threads: usize, reps: usize) -> f64 {
+    pool(threads).install(|| {
+        let mut a = vec![0.0f64; n];
+        let b: Vec<f64> = (0..n).into_par_iter().map(|i| i as f64).collect();
+        let c: Vec<f64> = (0..n).into_par_iter().map(|i| 0.5 * i as f64).collect();
+        a.par_iter_mut().for_each(|v| *v = 1.0);
+        let chunk = n.div_ceil(threads);
+        let mut best = f64::INFINITY;
+        for r in 0..reps {
+            let s = 3.0 + r as f64;
+            let t = Instant::now();
+            a.par_chunks_mut(chunk)
+                .zip(b.par_chunks(chunk))
+                .zip(c.par_chunks(chunk))
+                .for_each(|((a, b), c)| {
+                    for ((a, b), c) in a.iter_mut().zip(b).zip(c) {
+                        *a = b + s * c;
+                    }
+                });
+            best = best.min(t.elapsed().as_secs_f64());
+        }
+        std::hint::black_box(&a);
+        24.0 * n as f64 / best / 1e9
+    })
+}
+
+fn main() {
+    let quick = std::env::args().any(|a| a == "--quick");
+    // --only SECTION (bandwidth, assembly, step, crack) runs one section, for profiling.
+    let args: Vec<String> = std::env::args().collect();
+    let only = args
+        .iter()
+        .position(|a| a == "--only")
+        .and_then(|i| args.get(i + 1).cloned());
+    let run_section = |name: &str| only.as_deref().is_none_or(|o| o == name);
+    let lam = laminate();
+    let interfaces = lam.interfaces_m();
+    let height = lam.thickness_m();
+    let max_threads = rayon::current_num_threads().max(1);
+    let thread_counts: Vec<usize> = if max_threads >= 2 { vec![1, 2] } else { vec![1] };
+    println!(
+        "trnews throughput benchmark{} - laminate {} layers, {:.2} mm x {:.2} mm, {} rayon threads",
+        if quick { " (quick)" } else { "" },
+        lam.layers.len(),
+        WIDTH_M * 1e3,
+        height * 1e3,
+        max_threads
+    );
+
+    // --- memory bandwidth -------------------------------------------------------------
+    let triad_n = if quick { 1 << 22 } else { 1 << 24 };
+    let bandwidth: Vec<Bandwidth> = thread_counts
+        .iter()
+        .filter(|_| run_section("bandwidth"))
+        .map(|&t| Bandwidth {
+            threads: t,
+            triad_gb_s: triad(triad_n, t, if quick { 3 } else { 10 }),
+            array_mb: 8.0 * triad_n as f64 / 1e6,
+        })
+        .collect();
+    println!("\nMemory bandwidth (triad a = b + s c, 3 arrays of {:.0} MB):", 8.0 * triad_n as f64 / 1e6);
+    for b in &bandwidth {
+        println!("  {} thread(s): {:6.1} GB/s", b.threads, b.triad_gb_s);
+    }
+
+    // --- assembly -------------------------------------------------------------------------
+    let assembly_targets: &[usize] = if quick { &[100_000] } else { &[100_000, 1_000_000] };
+    let mut assembly = Vec::new();
+    println!("\nAssembly (Model::build: validate, K, lumped M, dashpots; mesh excluded), best of reps:");
+    println!("  {:>10} {:>10} {:>9} {:>9} {:>10}", "target", "DOFs", "hx (um)", "hy (um)", "time (ms)");
+    for &target in assembly_targets.iter().filter(|_| run_section("assembly")) {
+        let hy = hy_for(&interfaces, target);
+        let mesh = Mesh::layered(&lam, WIDTH_M, ASPECT * hy, hy, &[], &[]).unwrap();
+        let reps = if quick { 2 } else { 5 };
+        let mut best = f64::INFINITY;
+        let mut dofs = 0;
+        for _ in 0..reps {
+            let m = mesh.clone();
+            let fixed = fixed_corners(&m);
+            let t = Instant::now();
+            let model = Model::build(
+                m,
+                lam.materials.clone(),
+                &[Side::Bottom, Side::Left],
+                fixed,
+                None,
+            )
+            .unwrap();
+            best = best.min(t.elapsed().as_secs_f64());
+            dofs = model.dofs();
+            drop(model);
+        }
+        println!(
+            "  {:>10} {:>10} {:>9.2} {:>9.2} {:>10.1}",
+            target,
+            dofs,
+            ASPECT * hy * 1e6,
+            hy * 1e6,
+            best * 1e3
+        );
+        assembly.push(AssemblyRow {
+            target_dofs: target,
+            dofs,
+            hx_m: ASPECT * hy,
+            hy_m: hy,
+            best_ms: best * 1e3,
+            reps,
+        });
+    }
+
+    // --- explicit step throughput ---------------------------------------------------------
+    let step_targets: &[usize] = if quick {
+        &[20_000, 100_000]
+    } else {
+        &[20_000, 100_000, 400_000, 1_000_000]
+    };
+    let (steps, reps) = if quick { (100, 2) } else { (400, 5) };
+    let mut step_rows = Vec::new();
+    println!("\nExplicit step (solve::run, transmitter chirp + 1 receiver, ledger every 20 steps), best of {reps} x {steps} steps:");
+    println!(
+        "  {:>10} {:>10} {:>8} {:>12} {:>12} {:>12}",
+        "target", "DOFs", "threads", "ns/DOF/step", "ms/step", "kernel only"
+    );
+    for &target in step_targets.iter().filter(|_| run_section("step")) {
+        let hy = hy_for(&interfaces, target);
+        let mesh = Mesh::layered(&lam, WIDTH_M, ASPECT * hy, hy, &[], &[]).unwrap();
+        let model = build_model(&lam, mesh);
+        let dt = 0.9 * element_dt_bound(&model);
+        let mut source = traction_source(
+            &model.mesh,
+            [WIDTH_M, height - 1e-3],
+            [WIDTH_M, height - 4e-3],
+            110.0,
+            Signal {
+                dt_s: dt,
+                t0_s: 0.0,
+                samples: vec![1.0],
+            },
+        )
+        .unwrap();
+        source.signal = chirp_signal(dt, steps, 50e3);
+        let receiver = segment_receiver(
+            &model.mesh,
+            "r5",
+            [12e-3, height],
+            [12e-3, height],
+            1,
+            Quantity::Displacement,
+        )
+        .unwrap();
+        let sources = [source];
+        let receivers = [receiver];
+        for &threads in &thread_counts {
+            let best = pool(threads).install(|| {
+                timed_run(&model, &sources, &receivers, dt, steps / 4, None); // warm-up
+                (0..reps)
+                    .map(|_| timed_run(&model, &sources, &receivers, dt, steps, None).0)
+                    .fold(f64::INFINITY, f64::min)
+            });
+            let kernel = pool(threads).install(|| kernel_time(&model, dt, steps, reps));
+            let ns = best * 1e9 / model.dofs() as f64;
+            let kns = kernel * 1e9 / model.dofs() as f64;
+            println!(
+                "  {:>10} {:>10} {:>8} {:>12.3} {:>12.3} {:>12.3}",
+                target,
+                model.dofs(),
+                threads,
+                ns,
+                best * 1e3,
+                kns
+            );
+            step_rows.push(StepRow {
+                target_dofs: target,
+                dofs: model.dofs(),
+                threads,
+                steps,
+                best_ns_per_dof_step: ns,
+                kernel_ns_per_dof_step: kns,
+                best_ms_per_step: best * 1e3,
+                reps,
+            });
+        }
+    }
+
+    // --- crack overhead ---------------------------------------------------------------
+    // The default scene geometry (crack 2 mm long, 2 mm deep under x = 8 mm) at the default
+    // resolution (60 um x 40 um): the same mesh (it conforms to the crack line and tips in
+    // both cases) with and without the crack. A point force on the middle of the crack's
+    // upper face, directed at 110 degrees, makes the faces clap and slide.
+    let crack_steps = if quick { 100 } else { 400 };
+    let (hx, hy) = (60e-6, 40e-6);
+    let (yc, x0, x1) = (height - 2e-3, 7e-3, 9e-3);
+    let base = Mesh::layered(&lam, WIDTH_M, hx, hy, &[x0, x1], &[yc]).unwrap();
+    let (yc, x0, x1) = (
+        base.nearest_row_y(yc).unwrap(),
+        base.nearest_column_x(x0).unwrap(),
+        base.nearest_column_x(x1).unwrap(),
+    );
+    let mut cracked_mesh = base.clone();
+    let crack = cracked_mesh.insert_crack(yc, x0, x1).unwrap();
+    let mid = crack.pairs[crack.pairs.len() / 2].master;
+    let fixed = fixed_corners(&cracked_mesh);
+    let cracked = Model::build(
+        cracked_mesh,
+        lam.materials.clone(),
+        &[Side::Bottom, Side::Left],
+        fixed,
+        Some(crack),
+    )
+    .unwrap();
+    let plain = build_model(&lam, base);
+    let dt = 0.9 * element_dt_bound(&cracked).min(element_dt_bound(&plain));
+    let (s, c) = 110f64.to_radians().sin_cos();
+    // 1 N/m on one node at up to 2 MHz: strong enough to open and close the faces.
+    let mut force = chirp_signal(dt, crack_steps, 1.0);
+    force.samples.iter_mut().for_each(|v| *v = v.abs().max(0.2) * v.signum());
+    let point = Source {
+        weights: vec![(2 * mid, c), (2 * mid + 1, s)],
+        signal: force,
+    };
+    let receiver = segment_receiver(
+        &plain.mesh,
+        "r3",
+        [8e-3, height],
+        [8e-3, height],
+        1,
+        Quantity::Displacement,
+    )
+    .unwrap();
+    let (sources, receivers) = ([point], [receiver]);
+    let contact = Some(ContactOptions::default());
+    let mut crack_rows = Vec::new();
+    println!("\nCrack overhead (default scene, {} DOFs, contact with friction 0.6, best of {reps} x {crack_steps} steps):", cracked.dofs());
+    println!(
+        "  {:>8} {:>14} {:>14} {:>10} {:>16} {:>13}",
+        "threads", "cracked ns/DOF", "plain ns/DOF", "overhead", "steps in contact", "max slipping"
+    );
+    for &threads in thread_counts.iter().filter(|_| run_section("crack")) {
+        let (tc, tp, report) = pool(threads).install(|| {
+            timed_run(&cracked, &sources, &receivers, dt, crack_steps / 4, contact);
+            timed_run(&plain, &sources, &receivers, dt, crack_steps / 4, None);
+            let mut tc = f64::INFINITY;
+            let mut tp = f64::INFINITY;
+            let mut report = None;
+            // interleave the two so that machine noise hits both alike
+            for _ in 0..reps {
+                let (t, out) =
+                    timed_run(&cracked, &sources, &receivers, dt, crack_steps, contact);
+                tc = tc.min(t);
+                report = out.report.contact;
+                tp = tp.min(timed_run(&plain, &sources, &receivers, dt, crack_steps, None).0);
+            }
+            (tc, tp, report.expect("contact report"))
+        });
+        let nc = tc * 1e9 / cracked.dofs() as f64;
+        let np = tp * 1e9 / plain.dofs() as f64;
+        let overhead = 100.0 * (nc / np - 1.0);
+        let slipping = report.slipping.iter().copied().max().unwrap_or(0);
+        println!(
+            "  {:>8} {:>14.3} {:>14.3} {:>9.1}% {:>16} {:>13}",
+            threads, nc, np, overhead, report.steps_in_contact, slipping
+        );
+        crack_rows.push(CrackRow {
+            dofs_cracked: cracked.dofs(),
+            dofs_uncracked: plain.dofs(),
+            threads,
+            steps: crack_steps,
+            cracked_ns_per_dof_step: nc,
+            uncracked_ns_per_dof_step: np,
+            cracked_ms_per_step: tc * 1e3,
+            uncracked_ms_per_step: tp * 1e3,
+            overhead_percent: overhead,
+            crack_pairs: cracked.crack.as_ref().map_or(0, |c| c.pairs.len()),
+            steps_in_contact: report.steps_in_contact,
+            max_pairs_slipping: slipping,
+        });
+    }
+
+    let report = Report {
+        quick,
+        rayon_threads_available: max_threads,
+        assembly,
+        step: step_rows,
+        crack: crack_rows,
+        bandwidth,
+    };
+    let dir = std::env::var_os("CARGO_TARGET_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target"))
+        .join("bench");
+    std::fs::create_dir_all(&dir).expect("create bench directory");
+    let path = dir.join("throughput.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&report).unwrap()).expect("write JSON");
+    println!("\nJSON: {}", path.display());
+}

@@ -31,6 +31,36 @@ pub fn stiffness(x: [[f64; 2]; 3], c: &[[f64; 3]; 3]) -> ElementMatrix {
     b.transpose() * c * b * area
 }
 
+/// Row `a` of the element stiffness as the three 2x2 blocks (row-major [xx, xy, yx, yy])
+/// coupling node `a` to nodes 0, 1, 2: K_ab = A B_a^T C B_b, the same as
+/// [`stiffness`] up to round-off, but only the nonzero terms of B (assembly row by row).
+pub fn stiffness_row(x: [[f64; 2]; 3], c: &[[f64; 3]; 3], a: usize) -> [[f64; 4]; 3] {
+    let twice_area =
+        (x[1][0] - x[0][0]) * (x[2][1] - x[0][1]) - (x[2][0] - x[0][0]) * (x[1][1] - x[0][1]);
+    let area = 0.5 * twice_area;
+    // One division instead of six (the results differ from [`stiffness`] in the last bit).
+    let inv = 1.0 / twice_area;
+    let bc = |i: usize| {
+        let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+        ((x[j][1] - x[k][1]) * inv, (x[k][0] - x[j][0]) * inv)
+    };
+    let (ba, ca) = bc(a);
+    // G = B_a^T C (2x3): rows x, y of node a.
+    let g: [[f64; 3]; 2] = [
+        std::array::from_fn(|m| ba * c[0][m] + ca * c[2][m]),
+        std::array::from_fn(|m| ca * c[1][m] + ba * c[2][m]),
+    ];
+    std::array::from_fn(|b| {
+        let (bb, cb) = bc(b);
+        [
+            (g[0][0] * bb + g[0][2] * cb) * area,
+            (g[0][1] * cb + g[0][2] * bb) * area,
+            (g[1][0] * bb + g[1][2] * cb) * area,
+            (g[1][1] * cb + g[1][2] * bb) * area,
+        ]
+    })
+}
+
 /// Consistent mass rho A / 12 [[2 1 1], [1 2 1], [1 1 2]] per direction (report Sec. 4.4).
 pub fn consistent_mass(area: f64, density: f64) -> ElementMatrix {
     ElementMatrix::from_fn(|i, j| if i % 2 != j % 2 { 0.0 } else if i == j { 2.0 } else { 1.0 } * density * area / 12.0)
@@ -84,6 +114,27 @@ mod tests {
                     k[(i, j)],
                     hand[i][j]
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn stiffness_row_matches_the_full_matrix() {
+        let c = [[9.0e9, 3.1e9, 0.2e9], [3.1e9, 7.0e9, -0.1e9], [0.2e9, -0.1e9, 2.5e9]];
+        let x = [[0.1e-3, 0.2e-3], [1.3e-3, 0.4e-3], [0.5e-3, 1.7e-3]];
+        let k = stiffness(x, &c);
+        for a in 0..3 {
+            let row = stiffness_row(x, &c, a);
+            for b in 0..3 {
+                let full = [
+                    k[(2 * a, 2 * b)],
+                    k[(2 * a, 2 * b + 1)],
+                    k[(2 * a + 1, 2 * b)],
+                    k[(2 * a + 1, 2 * b + 1)],
+                ];
+                for (r, f) in row[b].iter().zip(full) {
+                    assert!((r - f).abs() <= 1e-14 * k.abs().max(), "{a} {b}: {r} vs {f}");
+                }
             }
         }
     }

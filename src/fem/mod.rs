@@ -2,11 +2,13 @@
 //! (report Sec. 4.4-4.7).
 
 pub mod element;
+pub mod operator;
 pub mod sparse;
 
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::mesh::{Crack, Mesh, Side};
+pub use operator::StiffnessOperator;
 pub use sparse::BlockCsr;
 
 /// The discrete model the integrators run: only what the scene asked for exists.
@@ -82,17 +84,24 @@ fn material_of<'a>(mesh: &Mesh, materials: &'a [Material], e: usize) -> Result<&
     })
 }
 
-/// Assembles the global stiffness K = sum_e A_e B_e^T C_e B_e (report Sec. 4.7).
+/// Assembles the global stiffness K = sum_e A_e B_e^T C_e B_e (report Sec. 4.7), row by row
+/// in parallel (each block sums its element contributions in element order).
 pub fn assemble_stiffness(mesh: &Mesh, materials: &[Material]) -> Result<BlockCsr> {
-    let mut k = BlockCsr::pattern(mesh.nodes.len(), &mesh.triangles);
-    for (e, &t) in mesh.triangles.iter().enumerate() {
-        let m = material_of(mesh, materials, e)?;
-        k.add_element(
-            t,
-            &element::stiffness(element_nodes(mesh, t), &m.stiffness_pa),
-        );
+    if let Some(e) = mesh
+        .element_material
+        .iter()
+        .position(|&id| id >= materials.len())
+    {
+        material_of(mesh, materials, e)?;
     }
-    Ok(k)
+    Ok(BlockCsr::assemble_rows(
+        mesh.nodes.len(),
+        &mesh.triangles,
+        |e, a| {
+            let c = &materials[mesh.element_material[e]].stiffness_pa;
+            element::stiffness_row(element_nodes(mesh, mesh.triangles[e]), c, a)
+        },
+    ))
 }
 
 /// Assembles the consistent mass matrix (report Sec. 4.4), for Newmark verification runs.

@@ -65,6 +65,103 @@ impl BlockCsr {
         }
     }
 
+    /// Assembles a matrix with the sparsity of a triangle mesh row by row, in parallel:
+    /// `row_blocks(e, a)` returns the 2x2 blocks (row-major) coupling local node `a` of
+    /// element `e` to its local nodes 0, 1, 2. Each block (r, c) is the sum of its element
+    /// contributions in element order, as sequential element-by-element assembly gives.
+    pub fn assemble_rows(
+        nodes: usize,
+        triangles: &[[usize; 3]],
+        row_blocks: impl Fn(usize, usize) -> [[f64; 4]; 3] + Sync,
+    ) -> BlockCsr {
+        // Elements around each node, in element order: (element, local index).
+        let mut start = vec![0usize; nodes + 1];
+        for t in triangles {
+            for &a in t {
+                start[a + 1] += 1;
+            }
+        }
+        for i in 0..nodes {
+            start[i + 1] += start[i];
+        }
+        let mut around = vec![(0u32, 0u8); start[nodes]];
+        let mut fill = start.clone();
+        for (e, t) in triangles.iter().enumerate() {
+            for (a, &n) in t.iter().enumerate() {
+                around[fill[n]] = (e as u32, a as u8);
+                fill[n] += 1;
+            }
+        }
+        drop(fill);
+        assert!(triangles.len() <= u32::MAX as usize, "too many elements");
+        // Sorted, deduplicated neighbour columns of node r into `buf`; returns their number.
+        let columns = |r: usize, buf: &mut Vec<u32>| {
+            buf.clear();
+            for &(e, _) in &around[start[r]..start[r + 1]] {
+                buf.extend(triangles[e as usize].iter().map(|&c| c as u32));
+            }
+            buf.sort_unstable();
+            buf.dedup();
+            buf.len()
+        };
+        let mut row_ptr = vec![0usize; nodes + 1];
+        row_ptr[1..]
+            .par_iter_mut()
+            .enumerate()
+            .for_each_init(Vec::new, |buf, (r, len)| *len = columns(r, buf));
+        for r in 0..nodes {
+            row_ptr[r + 1] += row_ptr[r];
+        }
+        let nnz = row_ptr[nodes];
+        let mut cols = vec![0u32; nnz];
+        let mut blocks = vec![[0.0f64; 4]; nnz];
+        // Split the outputs into per-task row ranges, then fill them in parallel.
+        let mut tasks = Vec::with_capacity(nodes / ROWS_PER_TASK + 1);
+        let (mut c_rest, mut b_rest) = (&mut cols[..], &mut blocks[..]);
+        for r0 in (0..nodes).step_by(ROWS_PER_TASK) {
+            let r1 = (r0 + ROWS_PER_TASK).min(nodes);
+            let len = row_ptr[r1] - row_ptr[r0];
+            let (c, cr) = std::mem::take(&mut c_rest).split_at_mut(len);
+            let (b, br) = std::mem::take(&mut b_rest).split_at_mut(len);
+            (c_rest, b_rest) = (cr, br);
+            tasks.push((r0, r1, c, b));
+        }
+        // Each row is summed in a small local buffer and written once: the first touch of
+        // the freshly allocated (lazily zeroed) output is then a write, not a read followed
+        // by a write, which would cost a copy-on-write page fault and a TLB shootdown on
+        // the other threads (measured: 2 threads slower than 1 at 1M DOFs without this).
+        tasks.into_par_iter().for_each(|(r0, r1, c, b)| {
+            let (mut buf, mut acc) = (Vec::new(), Vec::new());
+            let base = row_ptr[r0];
+            for r in r0..r1 {
+                let range = row_ptr[r] - base..row_ptr[r + 1] - base;
+                columns(r, &mut buf);
+                acc.clear();
+                acc.resize(buf.len(), [0.0f64; 4]);
+                for &(e, a) in &around[start[r]..start[r + 1]] {
+                    let t = triangles[e as usize];
+                    let k = row_blocks(e as usize, a as usize);
+                    for (&n, kb) in t.iter().zip(&k) {
+                        let p = buf
+                            .iter()
+                            .position(|&x| x as usize == n)
+                            .expect("column in the row pattern");
+                        for (v, w) in acc[p].iter_mut().zip(kb) {
+                            *v += w;
+                        }
+                    }
+                }
+                c[range.clone()].copy_from_slice(&buf);
+                b[range].copy_from_slice(&acc);
+            }
+        });
+        BlockCsr {
+            row_ptr,
+            cols,
+            blocks,
+        }
+    }
+
     /// Number of node rows.
     pub fn nodes(&self) -> usize {
         self.row_ptr.len() - 1

@@ -203,3 +203,35 @@ fn orphan_node_is_an_error() {
     let e = assemble_lumped_mass(&mesh, &mats).unwrap_err().to_string();
     assert!(e.contains("belongs to no element"), "{e}");
 }
+
+#[test]
+fn row_assembly_matches_element_by_element_assembly() {
+    // The parallel row-wise assembly against the plain element loop with the full 6x6
+    // element matrices, on a cracked mesh (duplicated nodes appended at the end).
+    let (mut mesh, mats) = small_cfrp();
+    let y = mesh.nearest_row_y(0.5 * mesh.bounds().3).unwrap();
+    let (x0, x1) = (
+        mesh.nearest_column_x(0.2e-3).unwrap(),
+        mesh.nearest_column_x(0.8e-3).unwrap(),
+    );
+    mesh.insert_crack(y, x0, x1).unwrap();
+    let k = assemble_stiffness(&mesh, &mats).unwrap();
+    let mut reference = BlockCsr::pattern(mesh.nodes.len(), &mesh.triangles);
+    for (e, &t) in mesh.triangles.iter().enumerate() {
+        let m = &mats[mesh.element_material[e]];
+        reference.add_element(
+            t,
+            &element::stiffness(t.map(|n| mesh.nodes[n]), &m.stiffness_pa),
+        );
+    }
+    assert_eq!(k.row_ptr, reference.row_ptr);
+    assert_eq!(k.cols, reference.cols);
+    let scale = reference
+        .blocks
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    for (a, b) in k.blocks.iter().flatten().zip(reference.blocks.iter().flatten()) {
+        assert!((a - b).abs() <= 1e-14 * scale, "{a} vs {b}");
+    }
+}

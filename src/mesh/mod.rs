@@ -300,12 +300,15 @@ impl Mesh {
 
     /// Boundary edges on a side as (element, node a, node b).
     pub fn side_edges(&self, side: Side) -> Vec<(usize, usize, usize)> {
-        let on_side: HashSet<usize> = self.side_nodes(side).into_iter().collect();
+        let mut on_side = vec![false; self.nodes.len()];
+        for n in self.side_nodes(side) {
+            on_side[n] = true;
+        }
         let mut edges = Vec::new();
         for (e, t) in self.triangles.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
-                if on_side.contains(&a) && on_side.contains(&b) {
+                if on_side[a] && on_side[b] {
                     edges.push((e, a, b));
                 }
             }

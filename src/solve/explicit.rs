@@ -6,6 +6,8 @@
 //! the undamped, unforced update u_{n+1} = 2 u_n - u_{n-1} - (dt^2/m)(K u_n) for every DOF,
 //! then sparse corrections touch only what the scene has: source DOFs, dashpot DOFs, crack
 //! pairs. Fixed DOFs have dt^2/m = 0 and so never move. Nothing is allocated per step.
+//! The kernel is [`StiffnessOperator::explicit_update`]: matrix-free stencils on structured
+//! meshes, the assembled K elsewhere.
 
 use super::ledger::{EnergyLedger, Flows};
 use super::{
@@ -14,33 +16,13 @@ use super::{
 };
 use crate::contact::ContactSolver;
 use crate::error::{Error, Result};
-use crate::fem::{BlockCsr, Model};
+use crate::fem::{Model, StiffnessOperator};
 use crate::signal::Signal;
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// Node rows per parallel task in the fused kernel.
-const ROWS_PER_TASK: usize = 2048;
 /// A run is declared unstable when its kinetic energy exceeds this multiple of the energy put in.
 const BLOW_UP_FACTOR: f64 = 100.0;
-
-/// u_next = 2 u - u_prev - a .* (K u), in parallel over node rows (bit-identical for any
-/// thread count: every entry is computed by one task in a fixed order).
-fn fused_update(k: &BlockCsr, a: &[f64], u_prev: &[f64], u: &[f64], u_next: &mut [f64]) {
-    u_next
-        .par_chunks_mut(2 * ROWS_PER_TASK)
-        .enumerate()
-        .for_each(|(chunk, out)| {
-            let r0 = chunk * ROWS_PER_TASK;
-            for (i, pair) in out.chunks_exact_mut(2).enumerate() {
-                let r = r0 + i;
-                let f = k.row_product(r, u);
-                let d = 2 * r;
-                pair[0] = 2.0 * u[d] - u_prev[d] - a[d] * f[0];
-                pair[1] = 2.0 * u[d + 1] - u_prev[d + 1] - a[d + 1] * f[1];
-            }
-        });
-}
 
 /// Per-DOF constants of the scheme.
 struct Coefficients {
@@ -75,21 +57,45 @@ impl Coefficients {
     }
 }
 
+/// DOFs per parallel task of the energy sums.
+const ENERGY_CHUNK: usize = 8192;
+
 /// Energy at t_{n-1/2}: kinetic 1/2 v^T M v with v = (u_n - u_{n-1})/dt, strain 1/2 u_{n-1}^T K u_n.
+/// Summed in parallel over fixed chunks of DOFs, the chunk sums then added in order: the
+/// result does not depend on the thread count. `ku` is scratch (it ends up holding each
+/// chunk's two partial sums in its first two entries).
 fn staggered_energy(
     model: &Model,
+    op: &StiffnessOperator,
     dt: f64,
     u_prev: &[f64],
     u: &[f64],
     ku: &mut [f64],
 ) -> (f64, f64) {
-    model.stiffness.mul(u, ku);
-    let mut kinetic = 0.0;
-    let mut strain = 0.0;
-    for i in 0..u.len() {
-        let v = (u[i] - u_prev[i]) / dt;
-        kinetic += model.lumped_mass[i] * v * v;
-        strain += u_prev[i] * ku[i];
+    op.mul(u, ku);
+    ku.par_chunks_mut(ENERGY_CHUNK)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            let r = c * ENERGY_CHUNK..c * ENERGY_CHUNK + chunk.len();
+            let (mut kinetic, mut strain) = (0.0, 0.0);
+            for (((&kui, &ui), &pi), &mi) in chunk
+                .iter()
+                .zip(&u[r.clone()])
+                .zip(&u_prev[r.clone()])
+                .zip(&model.lumped_mass[r])
+            {
+                let v = (ui - pi) / dt;
+                kinetic += mi * v * v;
+                strain += pi * kui;
+            }
+            // DOFs come in pairs and the chunk size is even: every chunk has 2+ entries.
+            chunk[0] = kinetic;
+            chunk[1] = strain;
+        });
+    let (mut kinetic, mut strain) = (0.0, 0.0);
+    for chunk in ku.chunks(ENERGY_CHUNK) {
+        kinetic += chunk[0];
+        strain += chunk[1];
     }
     (0.5 * kinetic, 0.5 * strain)
 }
@@ -115,6 +121,7 @@ pub(super) fn run(
     config: &RunConfig,
 ) -> Result<RunOutput> {
     let setup = Instant::now();
+    let op = StiffnessOperator::new(model);
     let stab = config
         .stability
         .unwrap_or_else(|| stability::estimate(model));
@@ -182,7 +189,7 @@ pub(super) fn run(
     let mut snapshots = Vec::new();
     let mut ledger = EnergyLedger::default();
     let mut flows = Flows::default();
-    let (k0, s0) = staggered_energy(model, dt, &u_prev, &u, &mut ku);
+    let (k0, s0) = staggered_energy(model, &op, dt, &u_prev, &u, &mut ku);
     ledger.initial_j = k0 + s0;
     let progress = super::progress_bar(config.progress, steps);
     let setup_time_s = setup.elapsed().as_secs_f64();
@@ -192,6 +199,7 @@ pub(super) fn run(
         if step % config.ledger_every == 0 {
             sample_ledger(
                 model,
+                &op,
                 dt,
                 step,
                 &u_prev,
@@ -202,7 +210,7 @@ pub(super) fn run(
                 stab.dt_crit_s,
             )?;
         }
-        fused_update(&model.stiffness, &coef.a, &u_prev, &u, &mut u_next);
+        op.explicit_update(&coef.a, &u_prev, &u, &mut u_next);
         for (source, values) in sources.iter().zip(&forces) {
             let f = values[step];
             if f != 0.0 {
@@ -262,6 +270,7 @@ pub(super) fn run(
     }
     sample_ledger(
         model,
+        &op,
         dt,
         steps,
         &u_prev,
@@ -325,6 +334,7 @@ pub(super) fn run(
 #[allow(clippy::too_many_arguments)]
 fn sample_ledger(
     model: &Model,
+    op: &StiffnessOperator,
     dt: f64,
     step: usize,
     u_prev: &[f64],
@@ -334,7 +344,7 @@ fn sample_ledger(
     flows: &Flows,
     dt_crit: f64,
 ) -> Result<()> {
-    let (kinetic, strain) = staggered_energy(model, dt, u_prev, u, ku);
+    let (kinetic, strain) = staggered_energy(model, op, dt, u_prev, u, ku);
     let time_s = (step as f64 - 0.5) * dt;
     let unstable = |reason: String| Error::Unstable {
         step,
