@@ -23,6 +23,7 @@ use trnews::signal::Signal;
 use trnews::solve::{
     self, segment_receiver, traction_source, Quantity, RunConfig, Source, StabilityEstimate,
 };
+use trnews::trnews as tr;
 
 const WIDTH_M: f64 = 16e-3;
 const ASPECT: f64 = 1.5;
@@ -81,6 +82,38 @@ struct Report {
     step: Vec<StepRow>,
     crack: Vec<CrackRow>,
     bandwidth: Vec<Bandwidth>,
+    sweep: Vec<SweepRow>,
+}
+
+/// A delayed TR-NEWS sweep on a linear scene: convolving one impulse response vs
+/// simulating every transmission.
+#[derive(Serialize)]
+struct SweepRow {
+    points: usize,
+    dofs: usize,
+    convolved_s: f64,
+    simulated_s: f64,
+    speedup: f64,
+    max_misfit_convolved: f64,
+}
+
+/// TR-NEWS at receiver 3 and a `points`-point delayed sweep (delays up to 2.5 us, a = 1) on
+/// the uncracked smoke scene, through `responder`; returns (seconds, largest misfit).
+fn sweep(responder: &tr::Responder, points: usize) -> (f64, f64) {
+    let clock = Instant::now();
+    let spec = tr::TrNewsSpec {
+        receivers: vec![3],
+        ..tr::TrNewsSpec::smoke()
+    };
+    let tr = tr::tr_news(responder, &spec).expect("tr-news");
+    let list: Vec<(Vec<f64>, Vec<f64>)> = (1..=points)
+        .map(|k| (vec![0.0, 2.5e-6 * k as f64 / points as f64], vec![1.0, 1.0]))
+        .collect();
+    let results = tr::delayed_tr_news(responder, &tr, &tr.focus[0], &list, 3e-6).expect("sweep");
+    (
+        clock.elapsed().as_secs_f64(),
+        results.iter().fold(0.0, |m, d| m.max(d.misfit)),
+    )
 }
 
 fn laminate() -> Laminate {
@@ -261,7 +294,7 @@ fn triad(n: usize, threads: usize, reps: usize) -> f64 {
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    // --only SECTION (bandwidth, assembly, step, crack) runs one section, for profiling.
+    // --only SECTION (bandwidth, assembly, step, crack, sweep) runs one section, for profiling.
     let args: Vec<String> = std::env::args().collect();
     let only = args
         .iter()
@@ -272,7 +305,11 @@ fn main() {
     let interfaces = lam.interfaces_m();
     let height = lam.thickness_m();
     let max_threads = rayon::current_num_threads().max(1);
-    let thread_counts: Vec<usize> = if max_threads >= 2 { vec![1, 2] } else { vec![1] };
+    let thread_counts: Vec<usize> = if max_threads >= 2 {
+        vec![1, 2]
+    } else {
+        vec![1]
+    };
     println!(
         "trnews throughput benchmark{} - laminate {} layers, {:.2} mm x {:.2} mm, {} rayon threads",
         if quick { " (quick)" } else { "" },
@@ -293,16 +330,28 @@ fn main() {
             array_mb: 8.0 * triad_n as f64 / 1e6,
         })
         .collect();
-    println!("\nMemory bandwidth (triad a = b + s c, 3 arrays of {:.0} MB):", 8.0 * triad_n as f64 / 1e6);
+    println!(
+        "\nMemory bandwidth (triad a = b + s c, 3 arrays of {:.0} MB):",
+        8.0 * triad_n as f64 / 1e6
+    );
     for b in &bandwidth {
         println!("  {} thread(s): {:6.1} GB/s", b.threads, b.triad_gb_s);
     }
 
     // --- assembly -------------------------------------------------------------------------
-    let assembly_targets: &[usize] = if quick { &[100_000] } else { &[100_000, 1_000_000] };
+    let assembly_targets: &[usize] = if quick {
+        &[100_000]
+    } else {
+        &[100_000, 1_000_000]
+    };
     let mut assembly = Vec::new();
-    println!("\nAssembly (Model::build: validate, K, lumped M, dashpots; mesh excluded), best of reps:");
-    println!("  {:>10} {:>10} {:>9} {:>9} {:>10}", "target", "DOFs", "hx (um)", "hy (um)", "time (ms)");
+    println!(
+        "\nAssembly (Model::build: validate, K, lumped M, dashpots; mesh excluded), best of reps:"
+    );
+    println!(
+        "  {:>10} {:>10} {:>9} {:>9} {:>10}",
+        "target", "DOFs", "hx (um)", "hy (um)", "time (ms)"
+    );
     for &target in assembly_targets.iter().filter(|_| run_section("assembly")) {
         let hy = hy_for(&interfaces, target);
         let mesh = Mesh::layered(&lam, WIDTH_M, ASPECT * hy, hy, &[], &[]).unwrap();
@@ -448,7 +497,10 @@ fn main() {
     let (s, c) = 110f64.to_radians().sin_cos();
     // 1 N/m on one node at up to 2 MHz: strong enough to open and close the faces.
     let mut force = chirp_signal(dt, crack_steps, 1.0);
-    force.samples.iter_mut().for_each(|v| *v = v.abs().max(0.2) * v.signum());
+    force
+        .samples
+        .iter_mut()
+        .for_each(|v| *v = v.abs().max(0.2) * v.signum());
     let point = Source {
         weights: vec![(2 * mid, c), (2 * mid + 1, s)],
         signal: force,
@@ -479,8 +531,7 @@ fn main() {
             let mut report = None;
             // interleave the two so that machine noise hits both alike
             for _ in 0..reps {
-                let (t, out) =
-                    timed_run(&cracked, &sources, &receivers, dt, crack_steps, contact);
+                let (t, out) = timed_run(&cracked, &sources, &receivers, dt, crack_steps, contact);
                 tc = tc.min(t);
                 report = out.report.contact;
                 tp = tp.min(timed_run(&plain, &sources, &receivers, dt, crack_steps, None).0);
@@ -511,8 +562,42 @@ fn main() {
         });
     }
 
+    // --- linear sweep: one impulse response vs one simulation per point ---------------------
+    let mut sweep_rows = Vec::new();
+    if run_section("sweep") {
+        let points = if quick { 10 } else { 50 };
+        let spec = trnews::scene::SceneSpec::smoke().uncracked();
+        let scene = std::sync::Arc::new(trnews::scene::Scene::build(&spec).expect("smoke scene"));
+        let duration = tr::TrNewsSpec::smoke().focus_duration_s() + 3e-6;
+        let clock = Instant::now();
+        let convolving = tr::Responder::new(scene.clone(), duration).expect("impulse response");
+        let (_, misfit) = sweep(&convolving, points);
+        let convolved_s = clock.elapsed().as_secs_f64();
+        let (simulated_s, _) = sweep(&tr::Responder::simulating(scene.clone()), points);
+        println!(
+            "\nLinear delayed TR-NEWS sweep, {points} points, smoke scene ({} DOFs):",
+            scene.model.dofs()
+        );
+        println!(
+            "  impulse response + convolutions: {convolved_s:8.2} s (largest misfit {misfit:.1e})"
+        );
+        println!(
+            "  one simulation per transmission: {simulated_s:8.2} s ({:.1}x slower)",
+            simulated_s / convolved_s
+        );
+        sweep_rows.push(SweepRow {
+            points,
+            dofs: scene.model.dofs(),
+            convolved_s,
+            simulated_s,
+            speedup: simulated_s / convolved_s,
+            max_misfit_convolved: misfit,
+        });
+    }
+
     let report = Report {
         quick,
+        sweep: sweep_rows,
         rayon_threads_available: max_threads,
         assembly,
         step: step_rows,

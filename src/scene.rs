@@ -496,8 +496,10 @@ pub struct TransmitOptions {
     pub force: bool,
     /// Energy-ledger sampling interval (steps).
     pub ledger_every: usize,
-    /// Keep a displacement snapshot every this many steps.
+    /// Take a displacement snapshot every this many steps.
     pub snapshot_every: Option<usize>,
+    /// Stream the snapshots as .npy files into this directory instead of keeping them.
+    pub snapshot_dir: Option<std::path::PathBuf>,
     /// Record the crack faces.
     pub record_crack: bool,
     /// Override the scene's contact options for this run (`None` keeps the scene's).
@@ -515,6 +517,7 @@ impl Default for TransmitOptions {
             force: false,
             ledger_every: 20,
             snapshot_every: None,
+            snapshot_dir: None,
             record_crack: false,
             contact: None,
             progress: true,
@@ -531,6 +534,7 @@ impl Scene {
             force: options.force,
             ledger_every: options.ledger_every,
             snapshot_every: options.snapshot_every,
+            snapshot_dir: options.snapshot_dir.clone(),
             record_crack: options.record_crack,
             contact: options.contact.or(self.contact),
             progress: options.progress && RunConfig::default().progress,

@@ -261,3 +261,39 @@ fn bad_run_inputs_are_errors_naming_the_field() {
         .to_string()
         .contains("source[0]"));
 }
+
+#[test]
+fn snapshots_stream_to_disk_or_stay_in_memory() {
+    let model = block(true);
+    let dt = 0.5 * stability::estimate(&model).dt_crit_s;
+    let dir = std::env::temp_dir().join(format!("trnews-snapshots-{}", std::process::id()));
+    let base = RunConfig {
+        dt_s: Some(dt),
+        duration_s: 100.0 * dt,
+        snapshot_every: Some(40),
+        ..Default::default()
+    };
+    let kept = run(&model, &[pulse_source(&model, dt)], &[], &base).unwrap();
+    let streamed = run(
+        &model,
+        &[pulse_source(&model, dt)],
+        &[],
+        &RunConfig {
+            snapshot_dir: Some(dir.clone()),
+            ..base
+        },
+    )
+    .unwrap();
+    assert_eq!(kept.snapshots.len(), 3); // steps 0, 40, 80
+    assert!(streamed.snapshots.is_empty());
+    for (k, snap) in kept.snapshots.iter().enumerate() {
+        let bytes = std::fs::read(dir.join(format!("snapshot_{:07}.npy", 40 * k))).unwrap();
+        // .npy: a header padded to a multiple of 64 bytes, then the little-endian f64 values
+        let data: Vec<f64> = bytes[bytes.len() - 8 * snap.displacement.len()..]
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        assert_eq!(data, snap.displacement);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -306,3 +306,26 @@ fn failed_assertion_shows_both_values() {
         "assert_close failed: actual 1.02 vs expected 1 (rel tol 0.01): gain",
     );
 }
+
+#[test]
+fn unstable_time_step_is_refused_with_dt_and_dt_crit() {
+    let dir = TempDir::new("cli-unstable");
+    let text = "let s = scene::preset(\"smoke\", #{ crack: () });\nlet c = signal::chirp(#{ dt_s: 2.0 * s.dt_crit });\nlet run = s.transmit(c, #{ duration_s: 1e-6, dt_s: 2.0 * s.dt_crit });\n";
+    let s = dir.script("unstable.rhai", text);
+    let o = cli(dir.path(), &[s.to_str().unwrap()]);
+    assert_one_line_error(
+        &o,
+        &s,
+        "3:13",
+        "exceeds the explicit stability limit dt_crit",
+    );
+}
+
+#[test]
+fn receiver_outside_the_domain_is_an_error_naming_it() {
+    let dir = TempDir::new("cli-receiver");
+    let text = "let s = scene::preset(\"smoke\", #{ receivers: #{ x_m: [1e-3, 0.5] } });\n";
+    let s = dir.script("receiver.rhai", text);
+    let o = cli(dir.path(), &[s.to_str().unwrap()]);
+    assert_one_line_error(&o, &s, "1:16", "receiver 'receiver 2'");
+}

@@ -120,7 +120,11 @@ mod tests {
 
     #[test]
     fn stiffness_row_matches_the_full_matrix() {
-        let c = [[9.0e9, 3.1e9, 0.2e9], [3.1e9, 7.0e9, -0.1e9], [0.2e9, -0.1e9, 2.5e9]];
+        let c = [
+            [9.0e9, 3.1e9, 0.2e9],
+            [3.1e9, 7.0e9, -0.1e9],
+            [0.2e9, -0.1e9, 2.5e9],
+        ];
         let x = [[0.1e-3, 0.2e-3], [1.3e-3, 0.4e-3], [0.5e-3, 1.7e-3]];
         let k = stiffness(x, &c);
         for a in 0..3 {
@@ -133,7 +137,10 @@ mod tests {
                     k[(2 * a + 1, 2 * b + 1)],
                 ];
                 for (r, f) in row[b].iter().zip(full) {
-                    assert!((r - f).abs() <= 1e-14 * k.abs().max(), "{a} {b}: {r} vs {f}");
+                    assert!(
+                        (r - f).abs() <= 1e-14 * k.abs().max(),
+                        "{a} {b}: {r} vs {f}"
+                    );
                 }
             }
         }

@@ -576,8 +576,14 @@ mod tests {
             let x1 = mesh.nearest_column_x(x_breaks[1]).unwrap();
             mesh.insert_crack(y, x0, x1).unwrap()
         });
-        Model::build(mesh, lam.materials, &[Side::Bottom, Side::Left], vec![0, 1], crack)
-            .unwrap()
+        Model::build(
+            mesh,
+            lam.materials,
+            &[Side::Bottom, Side::Left],
+            vec![0, 1],
+            crack,
+        )
+        .unwrap()
     }
 
     fn check(model: &Model, expect_stencils: bool) {
@@ -600,7 +606,10 @@ mod tests {
                 .iter()
                 .zip(&f_ref)
                 .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-            assert!(err <= 1e-13 * scale, "K u: error {err:e} vs scale {scale:e}");
+            assert!(
+                err <= 1e-13 * scale,
+                "K u: error {err:e} vs scale {scale:e}"
+            );
             let mut next = vec![0.0; n];
             op.explicit_update(&a, &up, &u, &mut next);
             for d in 0..n {
@@ -642,7 +651,9 @@ mod tests {
         let m = model(&[0.71e-3, 2.03e-3], true);
         let mut op = StiffnessOperator::new(&m);
         let n = m.dofs();
-        let u: Vec<f64> = (0..n).map(|i| ((i * 7919) % 1000) as f64 * 1e-3 - 0.5).collect();
+        let u: Vec<f64> = (0..n)
+            .map(|i| ((i * 7919) % 1000) as f64 * 1e-3 - 0.5)
+            .collect();
         let a: Vec<f64> = (0..n).map(|i| 1e-12 * ((i * 31) % 17) as f64).collect();
         let mut results = Vec::new();
         for avx in [false, has_avx()] {
@@ -662,7 +673,9 @@ mod tests {
         let m = model(&[0.71e-3, 2.03e-3], true);
         let op = StiffnessOperator::new(&m);
         let n = m.dofs();
-        let u: Vec<f64> = (0..n).map(|i| ((i * 7919) % 1000) as f64 * 1e-3 - 0.5).collect();
+        let u: Vec<f64> = (0..n)
+            .map(|i| ((i * 7919) % 1000) as f64 * 1e-3 - 0.5)
+            .collect();
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -674,7 +687,10 @@ mod tests {
         };
         let one = run(1);
         for t in [2, 3, 5] {
-            assert!(run(t).iter().zip(&one).all(|(a, b)| a.to_bits() == b.to_bits()));
+            assert!(run(t)
+                .iter()
+                .zip(&one)
+                .all(|(a, b)| a.to_bits() == b.to_bits()));
         }
     }
 }

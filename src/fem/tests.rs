@@ -231,7 +231,12 @@ fn row_assembly_matches_element_by_element_assembly() {
         .iter()
         .flatten()
         .fold(0.0f64, |m, v| m.max(v.abs()));
-    for (a, b) in k.blocks.iter().flatten().zip(reference.blocks.iter().flatten()) {
+    for (a, b) in k
+        .blocks
+        .iter()
+        .flatten()
+        .zip(reference.blocks.iter().flatten())
+    {
         assert!((a - b).abs() <= 1e-14 * scale, "{a} vs {b}");
     }
 }

@@ -129,7 +129,7 @@ mod scene_api {
         Ok(m.into())
     }
 
-    /// Transmits `traction` (Pa) from the transmitter with run options #{duration_s, dt_s, integrator, force, ledger_every, snapshot_every, record_crack, contact, progress}; returns the Run.
+    /// Transmits `traction` (Pa) from the transmitter with run options #{duration_s, dt_s, integrator, force, ledger_every, snapshot_every, snapshot_dir (under the output directory), record_crack, contact, progress}; returns the Run.
     #[rhai_fn(global, pure, return_raw)]
     pub fn transmit(
         ctx: NativeCallContext,
@@ -137,7 +137,16 @@ mod scene_api {
         traction: Signal,
         run_options: Map,
     ) -> Res<RunRef> {
-        let o: TransmitOptions = options(&ctx, run_options, &TransmitOptions::default(), "run")?;
+        let mut o: TransmitOptions =
+            options(&ctx, run_options, &TransmitOptions::default(), "run")?;
+        if let Some(dir) = &o.snapshot_dir {
+            // resolve a file inside the directory: checks the sandbox and creates it
+            let host = crate::script::HostContext::of(&ctx)?;
+            let resolved = host
+                .resolve_output(&dir.join("x").to_string_lossy())
+                .map_err(|e| super::error(&ctx, e))?;
+            o.snapshot_dir = resolved.parent().map(|p| p.to_path_buf());
+        }
         Ok(Arc::new(
             scene.transmit(&traction, &scene.config(&o)).at(&ctx)?,
         ))

@@ -12,7 +12,7 @@
 use super::ledger::{EnergyLedger, Flows};
 use super::{
     sample_sources, stability, CrackTraces, Quantity, Receiver, RunConfig, RunOutput, RunReport,
-    Snapshot, Source,
+    Source,
 };
 use crate::contact::ContactSolver;
 use crate::error::{Error, Result};
@@ -257,10 +257,7 @@ pub(super) fn run(
             s.push(u[2 * p.slave + 1]);
         }
         if config.snapshot_every.is_some_and(|k| step % k == 0) {
-            snapshots.push(Snapshot {
-                time_s: step as f64 * dt,
-                displacement: u.clone(),
-            });
+            super::keep_snapshot(config, &mut snapshots, step, dt, &u)?;
         }
         std::mem::swap(&mut u_prev, &mut u);
         std::mem::swap(&mut u, &mut u_next);

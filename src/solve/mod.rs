@@ -77,8 +77,11 @@ pub struct RunConfig {
     pub force: bool,
     /// Evaluate the energy ledger and the blow-up check every this many steps.
     pub ledger_every: usize,
-    /// Keep a displacement snapshot every this many steps.
+    /// Take a displacement snapshot every this many steps.
     pub snapshot_every: Option<usize>,
+    /// Stream snapshots to `snapshot_NNNNNNN.npy` files (2 values per node, step number in
+    /// the name) in this directory instead of keeping them in memory.
+    pub snapshot_dir: Option<std::path::PathBuf>,
     /// Record the crack-face node traces.
     pub record_crack: bool,
     /// Contact on the crack faces; `None` leaves a crack open (faces pass through each other).
@@ -103,6 +106,7 @@ impl Default for RunConfig {
             force: false,
             ledger_every: 20,
             snapshot_every: None,
+            snapshot_dir: None,
             record_crack: false,
             contact: None,
             initial_displacement: None,
@@ -179,6 +183,28 @@ pub struct RunOutput {
     pub snapshots: Vec<Snapshot>,
     /// Energy ledger time series.
     pub ledger: EnergyLedger,
+}
+
+/// Keeps a snapshot in memory, or writes it whole to the snapshot directory when there is one.
+fn keep_snapshot(
+    config: &RunConfig,
+    snapshots: &mut Vec<Snapshot>,
+    step: usize,
+    dt: f64,
+    u: &[f64],
+) -> Result<()> {
+    match &config.snapshot_dir {
+        Some(dir) => crate::io::write_npy(
+            &dir.join(format!("snapshot_{step:07}.npy")),
+            u,
+            &[u.len() / 2, 2],
+        )?,
+        None => snapshots.push(Snapshot {
+            time_s: step as f64 * dt,
+            displacement: u.to_vec(),
+        }),
+    }
+    Ok(())
 }
 
 /// Runs the model with the given sources and receivers.

@@ -7,8 +7,7 @@
 
 use super::ledger::{EnergyLedger, Flows};
 use super::{
-    sample_sources, stability, Quantity, Receiver, RunConfig, RunOutput, RunReport, Snapshot,
-    Source,
+    sample_sources, stability, Quantity, Receiver, RunConfig, RunOutput, RunReport, Source,
 };
 use crate::error::{Error, Result};
 use crate::fem::{assemble_consistent_mass, BlockCsr, Model};
@@ -192,10 +191,7 @@ pub(super) fn run(
             t.push(r.weights.iter().map(|&(d, w)| w * x[d]).sum());
         }
         if config.snapshot_every.is_some_and(|k| step % k == 0) {
-            snapshots.push(Snapshot {
-                time_s: step as f64 * dt,
-                displacement: u.clone(),
-            });
+            super::keep_snapshot(config, &mut snapshots, step, dt, &u)?;
         }
         for d in 0..n {
             u_next[d] = c1 * u[d] + c2 * v[d] + a[d];
