@@ -63,11 +63,6 @@ impl Responder {
         Ok(r)
     }
 
-    /// The scene it answers for.
-    pub fn scene(&self) -> &Scene {
-        &self.scene
-    }
-
     /// The solver step of every response (s).
     pub fn dt_s(&self) -> f64 {
         self.dt_s

@@ -19,33 +19,6 @@ pub enum Side {
     Right,
 }
 
-impl Side {
-    /// Parses `bottom`, `top`, `left`, `right`.
-    pub fn parse(name: &str) -> Result<Side> {
-        match name {
-            "bottom" => Ok(Side::Bottom),
-            "top" => Ok(Side::Top),
-            "left" => Ok(Side::Left),
-            "right" => Ok(Side::Right),
-            other => Err(Error::invalid(
-                "side",
-                other,
-                "expected bottom, top, left or right",
-            )),
-        }
-    }
-
-    /// Unit outward normal.
-    pub fn outward_normal(self) -> [f64; 2] {
-        match self {
-            Side::Bottom => [0.0, -1.0],
-            Side::Top => [0.0, 1.0],
-            Side::Left => [-1.0, 0.0],
-            Side::Right => [1.0, 0.0],
-        }
-    }
-}
-
 /// The rectilinear grid behind a structured mesh: node (i, j) has index `j * x.len() + i`.
 #[derive(Clone, Debug, Serialize)]
 pub struct Grid {
