@@ -5,6 +5,8 @@ use crate::laminate::Laminate;
 use serde::Serialize;
 use std::collections::HashSet;
 
+pub mod gmsh;
+
 /// A side of the rectangular region.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
