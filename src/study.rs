@@ -80,37 +80,6 @@ pub struct WorkPrecisionPoint {
     pub report: RunReport,
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn work_precision_errors_fall_with_resolution() {
-        // Halving h at a fixed dt/dt_crit halves dt too: a second-order method's error falls
-        // about 4x; we require 3x (the coarsest mesh is not yet asymptotic).
-        let spec = WorkPrecisionSpec {
-            element_sizes_m: vec![50e-6, 25e-6],
-            explicit_fractions: vec![0.9],
-            newmark_multiples: vec![0.9],
-            ..Default::default()
-        };
-        let points = work_precision(&spec).unwrap();
-        assert_eq!(points.len(), 4);
-        for kind in ["explicit", "newmark"] {
-            let e: Vec<f64> = points
-                .iter()
-                .filter(|p| p.integrator == kind)
-                .map(|p| p.error)
-                .collect();
-            assert!(e[0] / e[1] > 3.0, "{kind}: errors {e:?}");
-            assert!(e[1] < 0.05, "{kind}: error at 25 um {}", e[1]);
-        }
-        assert!(points
-            .iter()
-            .all(|p| p.run_time_s > 0.0 && p.report.energy_residual_peak < 1e-6));
-    }
-}
-
 fn pulse(t: f64, width: f64) -> f64 {
     (-((t - 4.0 * width) / width).powi(2)).exp()
 }
@@ -208,4 +177,35 @@ pub fn work_precision(spec: &WorkPrecisionSpec) -> Result<Vec<WorkPrecisionPoint
         }
     }
     Ok(points)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn work_precision_errors_fall_with_resolution() {
+        // Halving h at a fixed dt/dt_crit halves dt too: a second-order method's error falls
+        // about 4x; we require 3x (the coarsest mesh is not yet asymptotic).
+        let spec = WorkPrecisionSpec {
+            element_sizes_m: vec![50e-6, 25e-6],
+            explicit_fractions: vec![0.9],
+            newmark_multiples: vec![0.9],
+            ..Default::default()
+        };
+        let points = work_precision(&spec).unwrap();
+        assert_eq!(points.len(), 4);
+        for kind in ["explicit", "newmark"] {
+            let e: Vec<f64> = points
+                .iter()
+                .filter(|p| p.integrator == kind)
+                .map(|p| p.error)
+                .collect();
+            assert!(e[0] / e[1] > 3.0, "{kind}: errors {e:?}");
+            assert!(e[1] < 0.05, "{kind}: error at 25 um {}", e[1]);
+        }
+        assert!(points
+            .iter()
+            .all(|p| p.run_time_s > 0.0 && p.report.energy_residual_peak < 1e-6));
+    }
 }
