@@ -12,7 +12,10 @@ use super::{
 use crate::error::{Error, Result};
 use crate::fem::{assemble_consistent_mass, BlockCsr, Model};
 use crate::signal::Signal;
-use faer::linalg::solvers::Solve;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
+};
 use faer::sparse::{SparseColMat, Triplet};
 use std::time::Instant;
 
@@ -41,14 +44,40 @@ impl Mass {
     }
 }
 
-type Llt = faer::sparse::linalg::solvers::Llt<usize, f64>;
+/// A sparse Cholesky factor L L^T with its solve workspace allocated once, so that each
+/// time step's solve allocates nothing.
+struct Factor {
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+    workspace: MemBuffer,
+}
+
+impl Factor {
+    /// Solves A x = rhs in place.
+    fn solve_in_place(&mut self, rhs: faer::MatMut<'_, f64>) {
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            faer::Conj::No,
+            rhs,
+            faer::Par::Seq,
+            MemStack::new(&mut self.workspace),
+        );
+    }
+}
+
+fn not_positive_definite(e: impl std::fmt::Debug) -> Error {
+    Error::invalid(
+        "newmark matrix",
+        format!("{e:?}"),
+        "is not positive definite (is the model constrained?)",
+    )
+}
 
 /// Factors sum_k scale_k A_k (+ diagonal extra) with fixed DOFs replaced by identity rows.
 fn factor(
     n: usize,
     fixed: &[bool],
     fill: impl Fn(&mut dyn FnMut(usize, usize, f64)),
-) -> Result<Llt> {
+) -> Result<Factor> {
     let mut triplets = Vec::new();
     fill(&mut |i, j, v| {
         if !fixed[i] && !fixed[j] && v != 0.0 {
@@ -62,12 +91,32 @@ fn factor(
     );
     let s = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets)
         .map_err(|e| Error::invalid("newmark matrix", format!("{e:?}"), "could not be built"))?;
-    s.sp_cholesky(faer::Side::Lower).map_err(|e| {
-        Error::invalid(
-            "newmark matrix",
-            format!("{e:?}"),
-            "is not positive definite (is the model constrained?)",
+    let symbolic = factorize_symbolic_cholesky(
+        s.symbolic(),
+        faer::Side::Lower,
+        SymmetricOrdering::Amd,
+        Default::default(),
+    )
+    .map_err(not_positive_definite)?;
+    let mut values = vec![0.0; symbolic.len_val()];
+    let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(faer::Par::Seq, Default::default());
+    let mut buffer = MemBuffer::new(scratch);
+    symbolic
+        .factorize_numeric_llt(
+            &mut values,
+            s.as_ref(),
+            faer::Side::Lower,
+            Default::default(),
+            faer::Par::Seq,
+            MemStack::new(&mut buffer),
+            Default::default(),
         )
+        .map_err(not_positive_definite)?;
+    let workspace = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, faer::Par::Seq));
+    Ok(Factor {
+        symbolic,
+        values,
+        workspace,
     })
 }
 
@@ -97,7 +146,7 @@ pub(super) fn run(
     } else {
         Mass::Lumped(model.lumped_mass.clone())
     };
-    let effective = factor(n, &fixed, |add| {
+    let mut effective = factor(n, &fixed, |add| {
         model.stiffness.for_each_entry(&mut *add);
         mass.for_each_entry(|i, j, v| add(i, j, 4.0 / (dt * dt) * v));
         for &(d, c) in &model.dashpots {
@@ -144,7 +193,7 @@ pub(super) fn run(
             .map(|(d, (f, m))| if fixed[d] { 0.0 } else { f / m })
             .collect::<Vec<f64>>(),
         Mass::Consistent(m) => {
-            let llt = factor(n, &fixed, |add| m.for_each_entry(&mut *add))?;
+            let mut llt = factor(n, &fixed, |add| m.for_each_entry(&mut *add))?;
             let col = rhs.col_as_slice_mut(0);
             for d in 0..n {
                 col[d] = if fixed[d] { 0.0 } else { work[d] };
