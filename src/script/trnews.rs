@@ -133,6 +133,50 @@ mod trnews_api {
         Ok(m.into())
     }
 
+    /// Responses to several tractions (a parallel map over transmitted signals: independent simulations run concurrently, results identical for any thread count): an array of #{traces, report}.
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn respond_all(
+        ctx: NativeCallContext,
+        r: &mut Responder,
+        tractions: Array,
+        duration_s: FLOAT,
+    ) -> Res<Array> {
+        let signals = tractions
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                t.read_lock::<Signal>().map(|s| s.clone()).ok_or_else(|| {
+                    super::error(
+                        &ctx,
+                        format!("tractions[{i}] must be a Signal, got {}", t.type_name()),
+                    )
+                })
+            })
+            .collect::<Result<Vec<Signal>, _>>()?;
+        let responses = r.respond_all(&signals, duration_s).at(&ctx)?;
+        responses
+            .into_iter()
+            .map(|out| {
+                let mut m = Map::new();
+                m.insert(
+                    "traces".into(),
+                    out.traces
+                        .into_iter()
+                        .map(Dynamic::from)
+                        .collect::<Array>()
+                        .into(),
+                );
+                m.insert(
+                    "report".into(),
+                    out.report
+                        .as_ref()
+                        .map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))?,
+                );
+                Ok(Dynamic::from_map(m))
+            })
+            .collect()
+    }
+
     /// Runs TR-NEWS (chirp -> y -> Gamma -> Gamma(T - t) -> focus) with options over the report's defaults.
     #[rhai_fn(global, name = "tr_news", return_raw)]
     pub fn run(ctx: NativeCallContext, r: Responder, spec: Map) -> Res<TrNewsRef> {
