@@ -4,7 +4,7 @@
 use crate::script::convert::{error, floats, ScriptResult};
 use crate::trnews::{Delayed, Focus, Responder, TrNews};
 use rhai::plugin::*;
-use rhai::{Array, Engine, Map, Module, NativeCallContext};
+use rhai::{Array, Dynamic, Engine, Map, Module, NativeCallContext};
 use std::sync::Arc;
 
 /// A TR-NEWS result shared by its focus and delayed objects.
@@ -49,6 +49,25 @@ fn points(ctx: &NativeCallContext, list: &Array) -> ScriptResult<Vec<(Vec<f64>, 
             ))
         })
         .collect()
+}
+
+/// A response as the map #{traces: [Signal], report: map or ()}.
+fn response_map(ctx: &NativeCallContext, out: crate::trnews::Response) -> ScriptResult<Dynamic> {
+    let mut m = Map::new();
+    m.insert(
+        "traces".into(),
+        out.traces
+            .into_iter()
+            .map(Dynamic::from)
+            .collect::<Array>()
+            .into(),
+    );
+    let report = match &out.report {
+        Some(rep) => crate::script::convert::to_dynamic(ctx, rep)?,
+        None => Dynamic::UNIT,
+    };
+    m.insert("report".into(), report);
+    Ok(m.into())
 }
 
 #[export_module]
@@ -115,22 +134,7 @@ mod trnews_api {
         duration_s: FLOAT,
     ) -> Res<Dynamic> {
         let out = r.respond(&traction, duration_s).at(&ctx)?;
-        let mut m = Map::new();
-        m.insert(
-            "traces".into(),
-            out.traces
-                .into_iter()
-                .map(Dynamic::from)
-                .collect::<Array>()
-                .into(),
-        );
-        m.insert(
-            "report".into(),
-            out.report
-                .as_ref()
-                .map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))?,
-        );
-        Ok(m.into())
+        super::response_map(&ctx, out)
     }
 
     /// Responses to several tractions (a parallel map over transmitted signals: independent simulations run concurrently, results identical for any thread count): an array of #{traces, report}.
@@ -156,24 +160,7 @@ mod trnews_api {
         let responses = r.respond_all(&signals, duration_s).at(&ctx)?;
         responses
             .into_iter()
-            .map(|out| {
-                let mut m = Map::new();
-                m.insert(
-                    "traces".into(),
-                    out.traces
-                        .into_iter()
-                        .map(Dynamic::from)
-                        .collect::<Array>()
-                        .into(),
-                );
-                m.insert(
-                    "report".into(),
-                    out.report
-                        .as_ref()
-                        .map_or(Ok(Dynamic::UNIT), |rep| to_dynamic(&ctx, rep))?,
-                );
-                Ok(Dynamic::from_map(m))
-            })
+            .map(|out| super::response_map(&ctx, out))
             .collect()
     }
 
