@@ -166,7 +166,7 @@ fn build_model(lam: &Laminate, mesh: Mesh) -> Model {
     Model::build(
         mesh,
         lam.materials.clone(),
-        &[Side::Bottom, Side::Left],
+        &[Side::Bottom.into(), Side::Left.into()],
         fixed,
         crack,
     )
@@ -365,7 +365,7 @@ fn main() {
             let model = Model::build(
                 m,
                 lam.materials.clone(),
-                &[Side::Bottom, Side::Left],
+                &[Side::Bottom.into(), Side::Left.into()],
                 fixed,
                 None,
             )
@@ -487,7 +487,7 @@ fn main() {
     let cracked = Model::build(
         cracked_mesh,
         lam.materials.clone(),
-        &[Side::Bottom, Side::Left],
+        &[Side::Bottom.into(), Side::Left.into()],
         fixed,
         Some(crack),
     )

@@ -19,6 +19,7 @@ pub mod script;
 pub mod signal;
 pub mod solve;
 pub mod study;
+pub mod transducer;
 pub mod trnews;
 
 pub use error::{Error, Result};

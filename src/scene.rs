@@ -5,7 +5,7 @@
 
 use crate::contact::ContactOptions;
 use crate::error::{require_positive, Error, Result};
-use crate::fem::Model;
+use crate::fem::{AbsorbingEdge, Model};
 use crate::laminate::{Laminate, Layer, StochasticSpec};
 use crate::material::{Orthotropic, Plane};
 use crate::mesh::{Mesh, Side};
@@ -14,6 +14,7 @@ use crate::solve::{
     self, segment_receiver, traction_source, Integrator, Quantity, Receiver, RunConfig, RunOutput,
     StabilityEstimate,
 };
+use crate::transducer::TransducerSpec;
 use serde::{Deserialize, Serialize};
 
 /// How the layer stack is made.
@@ -116,6 +117,24 @@ impl Default for ReceiverSpec {
     }
 }
 
+/// How the absorbing sides absorb.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind", deny_unknown_fields)]
+pub enum Absorber {
+    /// The report's Lysmer-Kuhlemeyer dashpots alone (Fig. 3). They have no static
+    /// stiffness: the block drifts unless `fix_bottom_corners` pins it.
+    Dashpot,
+    /// Dashpots plus the springs of the viscous-spring boundary (see
+    /// [`crate::fem::AbsorbingEdge`]): the edge also carries the static stiffness of the
+    /// medium beyond it, so the block neither drifts nor needs point supports.
+    ViscousSpring {
+        /// Distance R from the wave source to every absorbing side (m); `None` takes, per
+        /// side, the distance from the transmitter's centre to the side.
+        #[serde(default)]
+        source_distance_m: Option<f64>,
+    },
+}
+
 /// A horizontal crack with contacting faces (report Sec. 4.9).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -156,10 +175,19 @@ pub struct SceneSpec {
     pub element_size_x_m: f64,
     /// Largest element height (m); thin layers get at least one row.
     pub element_size_y_m: f64,
-    /// Sides with Lysmer-Kuhlemeyer dashpots (report Fig. 3: bottom and left).
+    /// Absorbing sides (report Fig. 3: bottom and left), the rest of the region's edge is free.
     pub absorbing: Vec<Side>,
-    /// Fix both DOFs of the two bottom corners against rigid drift (report Fig. 3: four fixed DOFs).
+    /// How the absorbing sides absorb (default: viscous-spring; `#{kind: "dashpot"}` is the
+    /// report's).
+    pub absorber: Absorber,
+    /// Fix both DOFs of the two bottom corners against rigid drift (report Fig. 3: four
+    /// fixed DOFs). Off by default: point supports make the low-frequency response depend
+    /// on the mesh; the viscous-spring edges hold the block instead.
     pub fix_bottom_corners: bool,
+    /// The transducers' band, on transmission and reception (default 0.2-2 MHz, see
+    /// [`crate::transducer`]); `None` transmits the drive signal as the traction and records
+    /// the raw receiver quantity, as in the report.
+    pub transducer: Option<TransducerSpec>,
     /// The transmitter.
     pub transmitter: TransmitterSpec,
     /// The receivers.
@@ -177,7 +205,11 @@ impl Default for SceneSpec {
             element_size_x_m: 60e-6,
             element_size_y_m: 40e-6,
             absorbing: vec![Side::Bottom, Side::Left],
-            fix_bottom_corners: true,
+            absorber: Absorber::ViscousSpring {
+                source_distance_m: None,
+            },
+            fix_bottom_corners: false,
+            transducer: Some(TransducerSpec::default()),
             transmitter: TransmitterSpec::default(),
             receivers: ReceiverSpec::default(),
             crack: Some(CrackSpec::default()),
@@ -342,10 +374,11 @@ impl Scene {
         let transmitter = transmitter_weights(&mesh, &spec.transmitter, height, spec.width_m)?;
         let receivers = build_receivers(&mesh, &spec.receivers, height)?;
         let contact = spec.crack.as_ref().and_then(|c| c.contact);
+        let absorbing = absorbing_edges(spec, height)?;
         let model = Model::build(
             mesh,
             laminate.materials.clone(),
-            &spec.absorbing,
+            &absorbing,
             fixed,
             crack,
         )?;
@@ -376,8 +409,23 @@ impl Scene {
         }
     }
 
-    /// Transmits `traction` (Pa) from the transmitter and records every receiver.
-    pub fn transmit(&self, traction: &Signal, config: &RunConfig) -> Result<RunOutput> {
+    /// Drives the transmitter with `drive` (Pa) and records every receiver, through the
+    /// transducers' band when the scene has one: the traction is B * drive and each trace
+    /// B * the raw receiver quantity (see [`crate::transducer`]).
+    pub fn transmit(&self, drive: &Signal, config: &RunConfig) -> Result<RunOutput> {
+        let Some(t) = &self.spec.transducer else {
+            return self.apply_traction(drive, config);
+        };
+        let mut out = self.apply_traction(&t.transmit(drive, config.duration_s)?, config)?;
+        for trace in &mut out.traces {
+            *trace = t.receive(trace)?;
+        }
+        Ok(out)
+    }
+
+    /// Applies `traction` (Pa) on the transmitter segment and records the raw receiver
+    /// quantities, bypassing the transducers' band.
+    pub fn apply_traction(&self, traction: &Signal, config: &RunConfig) -> Result<RunOutput> {
         let source = solve::Source {
             weights: self.transmitter.clone(),
             signal: traction.clone(),
@@ -418,6 +466,56 @@ fn crack_geometry(spec: &SceneSpec, c: &CrackSpec, height: f64) -> Result<(f64, 
         ));
     }
     Ok((y, x0, x1))
+}
+
+/// The absorbing edges of the scene, with the viscous-spring distance resolved per side.
+fn absorbing_edges(spec: &SceneSpec, height: f64) -> Result<Vec<AbsorbingEdge>> {
+    let t = &spec.transmitter;
+    let source = [
+        spec.width_m,
+        height - 0.5 * (t.depth_top_m + t.depth_bottom_m),
+    ];
+    spec.absorbing
+        .iter()
+        .map(|&side| {
+            let spring_distance_m = match spec.absorber {
+                Absorber::Dashpot => None,
+                Absorber::ViscousSpring {
+                    source_distance_m: Some(r),
+                } => Some(r),
+                Absorber::ViscousSpring {
+                    source_distance_m: None,
+                } => Some(transmitter_distance(side, source, spec.width_m, height)?),
+            };
+            Ok(AbsorbingEdge {
+                side,
+                spring_distance_m,
+            })
+        })
+        .collect()
+}
+
+/// Distance from the transmitter's centre to the line of `side`; an error when the
+/// transmitter lies on that side (the springs' R must then be given).
+fn transmitter_distance(side: Side, source: [f64; 2], width: f64, height: f64) -> Result<f64> {
+    let d = match side {
+        Side::Left => source[0],
+        Side::Right => width - source[0],
+        Side::Bottom => source[1],
+        Side::Top => height - source[1],
+    };
+    if d < 1e-6 * width.max(height) {
+        return Err(Error::invalid(
+            "absorber.source_distance_m",
+            "none",
+            format!(
+                "the transmitter lies on the absorbing {} side: give the distance R from the \
+                 wave source to the absorbing sides",
+                format!("{side:?}").to_lowercase()
+            ),
+        ));
+    }
+    Ok(d)
 }
 
 fn bottom_corner_dofs(mesh: &Mesh) -> Vec<usize> {

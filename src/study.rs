@@ -28,7 +28,7 @@ pub fn plane_wave_strip(
         .flat_map(|&s| mesh.side_nodes(s))
         .map(|n| 2 * n)
         .collect();
-    Model::build(mesh, lam.materials, &[Side::Bottom], fixed, None)
+    Model::build(mesh, lam.materials, &[Side::Bottom.into()], fixed, None)
 }
 
 /// Parameters of the work-precision study.

@@ -6,6 +6,11 @@
 //! response to a unit impulse at step 0 (DESIGN.md). A [`Responder`] for such a scene runs
 //! that one simulation and answers every later transmission by convolution; for a cracked
 //! scene it simulates each transmission, in parallel when there are several.
+//!
+//! Every transmission goes through the scene's transducers (see [`crate::transducer`]): the
+//! drive signal s becomes the traction B * s and each receiver records B * its raw quantity,
+//! so every measure below (focus, side lobes, PI, delayed misfit) is in the transducer band.
+//! For a linear scene B * (h * (B * s)) is formed from the raw impulse response h.
 
 use crate::error::{Error, Result};
 use crate::scene::Scene;
@@ -54,7 +59,7 @@ impl Responder {
                 t0_s: 0.0,
                 samples: vec![1.0],
             };
-            let out = r.scene.transmit(&unit, &r.run_config(duration_s))?;
+            let out = r.scene.apply_traction(&unit, &r.run_config(duration_s))?;
             r.impulse = Some(Arc::new(Response {
                 traces: out.traces,
                 report: Some(out.report),
@@ -80,7 +85,8 @@ impl Responder {
         }
     }
 
-    /// Receivers' responses to the traction `s` (Pa) over `duration_s`.
+    /// Receivers' responses to the drive signal `s` (Pa) over `duration_s`, through the
+    /// scene's transducers.
     pub fn respond(&self, s: &Signal, duration_s: f64) -> Result<Response> {
         let s = if (s.dt_s / self.dt_s - 1.0).abs() > 1e-9 {
             signal::resample(s, self.dt_s)?
@@ -100,10 +106,21 @@ impl Responder {
                         ),
                     ));
                 }
+                let transducer = self.scene.spec.transducer.as_ref();
+                let traction = match transducer {
+                    Some(t) => t.transmit(&s, duration_s)?,
+                    None => s,
+                };
                 let traces = h
                     .traces
                     .iter()
-                    .map(|h| Ok(truncate(signal::convolve_discrete(&s, h)?, n)))
+                    .map(|h| {
+                        let raw = truncate(signal::convolve_discrete(&traction, h)?, n);
+                        match transducer {
+                            Some(t) => t.receive(&raw),
+                            None => Ok(raw),
+                        }
+                    })
                     .collect::<Result<Vec<_>>>()?;
                 Ok(Response {
                     traces,

@@ -402,7 +402,7 @@ fn crack_that_never_closes_matches_open_crack_bit_for_bit_and_no_crack_skips_con
     let model = Model::build(
         mesh,
         lam.materials.clone(),
-        &[Side::Bottom],
+        &[Side::Bottom.into()],
         vec![],
         Some(crack),
     )
@@ -452,7 +452,7 @@ fn crack_that_never_closes_matches_open_crack_bit_for_bit_and_no_crack_skips_con
     let plain = Model::build(
         Mesh::layered(&lam, 2e-3, 50e-6, 50e-6, &[], &[]).unwrap(),
         lam.materials,
-        &[Side::Bottom],
+        &[Side::Bottom.into()],
         vec![],
         None,
     )

@@ -17,7 +17,7 @@ fn block(absorbing: bool) -> Model {
     let lam = Laminate::homogeneous(epoxy(), 2e-3).unwrap();
     let mesh = Mesh::layered(&lam, 2e-3, 50e-6, 50e-6, &[], &[]).unwrap();
     let sides = if absorbing {
-        vec![Side::Bottom, Side::Left]
+        vec![Side::Bottom.into(), Side::Left.into()]
     } else {
         vec![]
     };

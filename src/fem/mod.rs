@@ -1,5 +1,5 @@
-//! Finite element model: element matrices, assembly of K, M and the absorbing dashpots
-//! (report Sec. 4.4-4.7).
+//! Finite element model: element matrices, assembly of K, M and the absorbing edges
+//! (report Sec. 4.4-4.7, and the viscous-spring boundary of Liu et al. 2006).
 
 pub mod element;
 pub mod operator;
@@ -8,8 +8,47 @@ pub mod sparse;
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::mesh::{Crack, Mesh, Side};
+use serde::{Deserialize, Serialize};
 pub use operator::StiffnessOperator;
 pub use sparse::BlockCsr;
+
+/// Spring factors of the 2D viscous-spring artificial boundary (Liu, Du, Wang & Wu 2006,
+/// "3D viscous-spring artificial boundary in time domain", Earthq. Eng. Eng. Vib. 5; the 2D
+/// values of Liu & Li 2005): normal K_N = ALPHA_N G / R, tangential K_T = ALPHA_T G / R per
+/// unit edge length, G the shear modulus and R the distance from the wave source to the edge.
+pub const VISCOUS_SPRING_ALPHA_N: f64 = 1.0;
+/// See [`VISCOUS_SPRING_ALPHA_N`].
+pub const VISCOUS_SPRING_ALPHA_T: f64 = 0.5;
+
+/// An absorbing edge of the region: Lysmer-Kuhlemeyer dashpots (report Sec. 4.6), plus the
+/// springs of the viscous-spring boundary when `spring_distance_m` is set.
+///
+/// The dashpots alone absorb plane waves at normal incidence exactly but have no static
+/// stiffness, so a body held only by them drifts under a net load; pinning points instead
+/// makes the low-frequency response depend on the mesh (a point support's compliance grows
+/// without bound under refinement in 2D). The springs stand for the static stiffness of the
+/// medium beyond the edge: an outgoing cylindrical wave from a source at distance R loads the
+/// edge with a traction -(rho c v + alpha G u / R) (Deeks & Randolph 1994). At normal
+/// incidence a plane wave of angular frequency omega is reflected with
+/// |R| = k / sqrt(k^2 + (2 omega Z)^2), k = alpha G / R, Z = rho c: the price of the static
+/// support is a reflection that grows toward low frequency.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AbsorbingEdge {
+    /// The side.
+    pub side: Side,
+    /// Distance R from the wave source to the edge (m) for the springs; `None`: dashpots only.
+    pub spring_distance_m: Option<f64>,
+}
+
+impl From<Side> for AbsorbingEdge {
+    /// Dashpots only (the report's Lysmer-Kuhlemeyer edge).
+    fn from(side: Side) -> Self {
+        AbsorbingEdge {
+            side,
+            spring_distance_m: None,
+        }
+    }
+}
 
 /// The discrete model the integrators run: only what the scene asked for exists.
 #[derive(Clone, Debug)]
@@ -18,7 +57,7 @@ pub struct Model {
     pub mesh: Mesh,
     /// Materials indexed by `mesh.element_material`.
     pub materials: Vec<Material>,
-    /// Assembled stiffness K (symmetric).
+    /// Assembled stiffness K (symmetric), including the springs of viscous-spring edges.
     pub stiffness: BlockCsr,
     /// Row-sum lumped mass per DOF (kg per unit thickness).
     pub lumped_mass: Vec<f64>,
@@ -32,11 +71,12 @@ pub struct Model {
 }
 
 impl Model {
-    /// Validates the mesh and assembles K, the lumped M and the dashpots of `absorbing` sides.
+    /// Validates the mesh and assembles K (with the springs of viscous-spring edges), the
+    /// lumped M and the dashpots of the `absorbing` edges. A side listed twice is an error.
     pub fn build(
         mesh: Mesh,
         materials: Vec<Material>,
-        absorbing: &[Side],
+        absorbing: &[AbsorbingEdge],
         mut fixed_dofs: Vec<usize>,
         crack: Option<Crack>,
     ) -> Result<Model> {
@@ -50,9 +90,26 @@ impl Model {
         }
         fixed_dofs.sort_unstable();
         fixed_dofs.dedup();
-        let stiffness = assemble_stiffness(&mesh, &materials)?;
+        let sides: Vec<Side> = absorbing.iter().map(|a| a.side).collect();
+        if let Some(twice) = sides
+            .iter()
+            .enumerate()
+            .find_map(|(i, s)| sides[..i].contains(s).then_some(s))
+        {
+            return Err(Error::invalid(
+                "absorbing",
+                format!("{twice:?}").to_lowercase(),
+                "is listed twice (it would absorb twice)",
+            ));
+        }
+        let mut stiffness = assemble_stiffness(&mesh, &materials)?;
+        for edge in absorbing {
+            if let Some(r) = edge.spring_distance_m {
+                add_edge_springs(&mut stiffness, &mesh, &materials, edge.side, r)?;
+            }
+        }
         let lumped_mass = assemble_lumped_mass(&mesh, &materials)?;
-        let dashpots = assemble_dashpots(&mesh, &materials, absorbing)?;
+        let dashpots = assemble_dashpots(&mesh, &materials, &sides)?;
         Ok(Model {
             mesh,
             materials,
@@ -138,6 +195,49 @@ pub fn assemble_lumped_mass(mesh: &Mesh, materials: &[Material]) -> Result<Vec<f
     Ok(m)
 }
 
+/// Axis (0 = x, 1 = y) normal to a side.
+fn normal_axis(side: Side) -> usize {
+    match side {
+        Side::Bottom | Side::Top => 1,
+        Side::Left | Side::Right => 0,
+    }
+}
+
+/// Adds the springs of a viscous-spring edge to K's diagonal: for each boundary edge of
+/// length L, each of its two nodes gets ALPHA_N G L / (2 R) normal to the side and
+/// ALPHA_T G L / (2 R) along it, G = rho Vs^2 of the element the edge belongs to.
+fn add_edge_springs(
+    k: &mut BlockCsr,
+    mesh: &Mesh,
+    materials: &[Material],
+    side: Side,
+    distance_m: f64,
+) -> Result<()> {
+    if !(distance_m.is_finite() && distance_m > 0.0) {
+        return Err(Error::invalid(
+            "absorber.source_distance_m",
+            distance_m,
+            "must be a positive distance (m)",
+        ));
+    }
+    let axis = normal_axis(side);
+    for (e, a, b) in mesh.side_edges(side) {
+        let mat = material_of(mesh, materials, e)?;
+        let g = mat.density_kg_m3 * mat.wave_speeds().s_m_s.powi(2);
+        let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
+        let half = 0.5 * (pb[0] - pa[0]).hypot(pb[1] - pa[1]);
+        let (k_n, k_t) = (
+            VISCOUS_SPRING_ALPHA_N * g * half / distance_m,
+            VISCOUS_SPRING_ALPHA_T * g * half / distance_m,
+        );
+        for n in [a, b] {
+            let (kx, ky) = if axis == 0 { (k_n, k_t) } else { (k_t, k_n) };
+            k.add_diagonal(n, [kx, ky]);
+        }
+    }
+    Ok(())
+}
+
 /// Lysmer-Kuhlemeyer dashpots on absorbing sides: for each boundary edge of length L, each
 /// of its two nodes gets rho Vp L / 2 normal to the side and rho Vs L / 2 along it, with rho,
 /// Vp, Vs of the element the edge belongs to (DESIGN.md item 6: the local impedance, not an
@@ -149,10 +249,7 @@ pub fn assemble_dashpots(
 ) -> Result<Vec<(usize, f64)>> {
     let mut c = std::collections::BTreeMap::<usize, f64>::new();
     for &side in sides {
-        let normal_axis = match side {
-            Side::Bottom | Side::Top => 1,
-            Side::Left | Side::Right => 0,
-        };
+        let normal_axis = normal_axis(side);
         for (e, a, b) in mesh.side_edges(side) {
             let mat = material_of(mesh, materials, e)?;
             let w = mat.wave_speeds();

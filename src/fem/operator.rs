@@ -579,7 +579,7 @@ mod tests {
         Model::build(
             mesh,
             lam.materials,
-            &[Side::Bottom, Side::Left],
+            &[Side::Bottom.into(), Side::Left.into()],
             vec![0, 1],
             crack,
         )

@@ -191,6 +191,13 @@ impl BlockCsr {
         }
     }
 
+    /// Adds `[a_xx, a_yy]` to the diagonal block of node `n` (a node-local spring).
+    pub fn add_diagonal(&mut self, n: usize, d: [f64; 2]) {
+        let p = self.position(n, n);
+        self.blocks[p][0] += d[0];
+        self.blocks[p][3] += d[1];
+    }
+
     /// (A u) for node row r.
     #[inline(always)]
     pub fn row_product(&self, r: usize, u: &[f64]) -> [f64; 2] {

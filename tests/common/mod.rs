@@ -58,7 +58,7 @@ pub fn strip(
         .map(|n| 2 * n + component)
         .collect();
     let absorbing = match bottom {
-        BottomEdge::Absorbing => vec![Side::Bottom],
+        BottomEdge::Absorbing => vec![Side::Bottom.into()],
         BottomEdge::Fixed => {
             fixed.extend(
                 mesh.side_nodes(Side::Bottom)
