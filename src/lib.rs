@@ -5,6 +5,7 @@
 //! Data flows one way: [`laminate`] -> [`mesh`] -> [`fem`] -> [`solve`] -> [`signal`] /
 //! [`trnews`] -> [`plot`] / [`io`]. [`scene`] describes a whole experiment setup.
 
+pub mod accuracy;
 pub mod contact;
 pub mod error;
 pub mod fem;

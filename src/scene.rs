@@ -272,6 +272,16 @@ impl SceneSpec {
         }
     }
 
+    /// The same scene (same laminate draw) with element sizes multiplied by `factor`: the
+    /// companions of an error estimate ([`crate::accuracy`]).
+    pub fn coarsened(&self, factor: f64) -> SceneSpec {
+        SceneSpec {
+            element_size_x_m: self.element_size_x_m * factor,
+            element_size_y_m: self.element_size_y_m * factor,
+            ..self.clone()
+        }
+    }
+
     /// The same scene without its crack.
     pub fn uncracked(&self) -> SceneSpec {
         SceneSpec {

@@ -12,6 +12,7 @@
 //! so every measure below (focus, side lobes, PI, delayed misfit) is in the transducer band.
 //! For a linear scene B * (h * (B * s)) is formed from the raw impulse response h.
 
+use crate::accuracy::{Estimate, T3_ORDER};
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use crate::signal::{self, Peak, SideLobes, Signal};
@@ -30,12 +31,18 @@ pub struct Response {
 }
 
 /// Answers "what do the receivers record when the transmitter sends s?". Cheap to clone.
+///
+/// With an error estimate ([`Responder::with_error_estimate`]) it also holds companions on
+/// the same scene with 2x and 4x the element sizes, and every procedure below repeats itself
+/// on them and reports Richardson estimates of its results (see [`crate::accuracy`]).
 #[derive(Clone, Debug)]
 pub struct Responder {
     scene: Arc<Scene>,
     dt_s: f64,
     /// Response to a unit impulse, per receiver, when the scene is linear.
     impulse: Option<Arc<Response>>,
+    /// Companions with 2x and 4x the element sizes; empty without an error estimate.
+    companions: Vec<Responder>,
 }
 
 impl Responder {
@@ -46,6 +53,7 @@ impl Responder {
             scene,
             dt_s,
             impulse: None,
+            companions: Vec::new(),
         }
     }
 
@@ -66,6 +74,35 @@ impl Responder {
             }));
         }
         Ok(r)
+    }
+
+    /// Adds the companions of an error estimate: the same scene (same laminate draw) with
+    /// 2x and 4x the element sizes, each with its own stable step, built the way this one
+    /// was (convolving when linear, over `duration_s`). They cost about 1/8 and 1/64 of a
+    /// run where every layer coarsens, more where thin layers keep one element row.
+    pub fn with_error_estimate(mut self, duration_s: f64) -> Result<Responder> {
+        self.companions = [2.0, 4.0]
+            .into_iter()
+            .map(|factor| {
+                let scene = Arc::new(Scene::build(&self.scene.spec.coarsened(factor))?);
+                if self.impulse.is_some() {
+                    Responder::new(scene, duration_s)
+                } else {
+                    Ok(Responder::simulating(scene))
+                }
+            })
+            .collect::<Result<_>>()?;
+        Ok(self)
+    }
+
+    /// The companions of the error estimate (2h, 4h), empty without one.
+    pub fn companions(&self) -> &[Responder] {
+        &self.companions
+    }
+
+    /// The scene it answers for.
+    pub fn scene(&self) -> &Arc<Scene> {
+        &self.scene
     }
 
     /// The solver step of every response (s).
@@ -234,6 +271,36 @@ pub struct Focus {
     pub pi_sum: Option<Signal>,
     /// Reports of the focusing runs (empty when convolved).
     pub reports: Vec<RunReport>,
+    /// Discretisation error estimates, when the responder has companions.
+    pub estimates: Option<FocusEstimates>,
+}
+
+/// Richardson estimates of the headline quantities of a focus (see [`crate::accuracy`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct FocusEstimates {
+    /// First-pass response y at this receiver over the record (relative L2).
+    pub response: Estimate,
+    /// Focused signal y_TR over the focus window window_s +- after_focus_s (relative L2).
+    pub focused: Estimate,
+    /// Focus peak amplitude.
+    pub peak_amplitude: Estimate,
+    /// Focus peak time (s).
+    pub peak_time_s: Estimate,
+    /// Side-lobe energy asymmetry.
+    pub side_lobe_asymmetry: Estimate,
+    /// Main-to-side-lobe ratio (dB).
+    pub main_to_side_db: Estimate,
+    /// Pulse-inversion residual max|PI| / max|y_TR|, with pulse inversion.
+    pub pi_residual: Option<Estimate>,
+}
+
+impl Focus {
+    /// Pulse-inversion residual max|PI sum| / max|y_TR|, with pulse inversion.
+    pub fn pi_residual(&self) -> Option<f64> {
+        self.pi_sum
+            .as_ref()
+            .map(|pi| pi.max_abs() / self.focused.max_abs())
+    }
 }
 
 /// The result of the TR-NEWS procedure.
@@ -249,6 +316,8 @@ pub struct TrNews {
     pub focus: Vec<Focus>,
     /// Report of the chirp run (None when convolved).
     pub chirp_report: Option<RunReport>,
+    /// The same procedure on the error estimate's companions (2h, 4h), if any.
+    pub companions: Vec<TrNews>,
 }
 
 impl TrNewsSpec {
@@ -279,8 +348,63 @@ impl TrNewsSpec {
     }
 }
 
-/// Runs TR-NEWS: chirp -> y -> Gamma = xcorr(y, c) -> Gamma(T - t) -> y_TR (eqs 6-9).
+/// Runs TR-NEWS: chirp -> y -> Gamma = xcorr(y, c) -> Gamma(T - t) -> y_TR (eqs 6-9), and
+/// on the responder's companions, with the error estimates of every focus.
 pub fn tr_news(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
+    let mut main = tr_news_once(responder, spec)?;
+    main.companions = responder
+        .companions
+        .iter()
+        .map(|c| tr_news_once(c, spec))
+        .collect::<Result<_>>()?;
+    if let [medium, coarse] = &main.companions[..] {
+        let estimates = (0..main.focus.len())
+            .map(|i| focus_estimates(&main, medium, coarse, i))
+            .collect::<Result<Vec<_>>>()?;
+        for (f, e) in main.focus.iter_mut().zip(estimates) {
+            f.estimates = Some(e);
+        }
+    }
+    Ok(main)
+}
+
+/// The estimates of focus `i` from the runs at h, 2h, 4h.
+fn focus_estimates(fine: &TrNews, medium: &TrNews, coarse: &TrNews, i: usize) -> Result<FocusEstimates> {
+    let f = [&fine.focus[i], &medium.focus[i], &coarse.focus[i]];
+    let scalar = |q: &dyn Fn(&Focus) -> f64| Estimate::scalar(q(f[0]), q(f[1]), q(f[2]), T3_ORDER);
+    let spec = &fine.spec;
+    let r = f[0].receiver - 1;
+    let focus_window = (
+        spec.window_s - spec.after_focus_s,
+        spec.window_s + spec.after_focus_s,
+    );
+    Ok(FocusEstimates {
+        response: Estimate::waveform(
+            &fine.responses[r],
+            &medium.responses[r],
+            &coarse.responses[r],
+            (0.0, spec.record_s),
+            T3_ORDER,
+        )?,
+        focused: Estimate::waveform(
+            &f[0].focused,
+            &f[1].focused,
+            &f[2].focused,
+            focus_window,
+            T3_ORDER,
+        )?,
+        peak_amplitude: scalar(&|x| x.peak.amplitude),
+        peak_time_s: scalar(&|x| x.peak.time_s),
+        side_lobe_asymmetry: scalar(&|x| x.side_lobes.asymmetry),
+        main_to_side_db: scalar(&|x| x.side_lobes.main_to_side_db),
+        pi_residual: match f.map(Focus::pi_residual) {
+            [Some(a), Some(b), Some(c)] => Some(Estimate::scalar(a, b, c, T3_ORDER)),
+            _ => None,
+        },
+    })
+}
+
+fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
     let peak_pa = responder.scene.spec.transmitter.peak_pa;
     let chirp = signal::chirp(
         spec.f0_hz,
@@ -355,6 +479,7 @@ pub fn tr_news(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
         responses: first.traces,
         focus,
         chirp_report: first.report,
+        companions: Vec::new(),
     })
 }
 
@@ -387,6 +512,7 @@ fn focus_at(
         inverted,
         pi_sum,
         reports,
+        estimates: None,
     })
 }
 
@@ -410,13 +536,70 @@ pub struct Delayed {
     pub window_s: (f64, f64),
     /// The run report (None when convolved).
     pub report: Option<RunReport>,
+    /// Discretisation error estimates, when the responder has companions.
+    pub estimates: Option<DelayedEstimates>,
+}
+
+/// Richardson estimates of a delayed TR-NEWS point (see [`crate::accuracy`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct DelayedEstimates {
+    /// The misfit.
+    pub misfit: Estimate,
+    /// The peak difference.
+    pub peak_difference: Estimate,
+    /// The simulated trace over the misfit window (relative L2).
+    pub simulation: Estimate,
+}
+
+/// Delayed TR-NEWS for several (delays, amplitudes) points, simulated in parallel, and on
+/// the responder's companions (each with its own focusing signal), with error estimates.
+pub fn delayed_tr_news(
+    responder: &Responder,
+    tr: &TrNews,
+    focus: &Focus,
+    points: &[(Vec<f64>, Vec<f64>)],
+    half_window_s: f64,
+) -> Result<Vec<Delayed>> {
+    let mut main = delayed_once(responder, tr, focus, points, half_window_s)?;
+    let (&[ref rm, ref rc], &[ref tm, ref tc]) = (&responder.companions[..], &tr.companions[..])
+    else {
+        return Ok(main);
+    };
+    let on = |r: &Responder, t: &TrNews| -> Result<Vec<Delayed>> {
+        let f = t
+            .focus
+            .iter()
+            .find(|f| f.receiver == focus.receiver)
+            .ok_or_else(|| Error::invalid("receiver", focus.receiver, "has no companion focus"))?;
+        delayed_once(r, t, f, points, half_window_s)
+    };
+    let (medium, coarse) = (on(rm, tm)?, on(rc, tc)?);
+    for ((d, m), c) in main.iter_mut().zip(&medium).zip(&coarse) {
+        d.estimates = Some(DelayedEstimates {
+            misfit: Estimate::scalar(d.misfit, m.misfit, c.misfit, T3_ORDER),
+            peak_difference: Estimate::scalar(
+                d.peak_difference,
+                m.peak_difference,
+                c.peak_difference,
+                T3_ORDER,
+            ),
+            simulation: Estimate::waveform(
+                &d.simulation,
+                &m.simulation,
+                &c.simulation,
+                d.window_s,
+                T3_ORDER,
+            )?,
+        });
+    }
+    Ok(main)
 }
 
 /// Delayed TR-NEWS for several (delays, amplitudes) points, simulated in parallel.
 /// Delays are rounded to whole solver steps (at most dt/2, a few ns, off), so that source
 /// and prediction are shifted exactly and a linear scene's misfit is round-off. The misfit
 /// window spans the focus times window_s + tau_i, widened by `half_window_s`.
-pub fn delayed_tr_news(
+fn delayed_once(
     responder: &Responder,
     tr: &TrNews,
     focus: &Focus,
@@ -474,6 +657,7 @@ pub fn delayed_tr_news(
                 peak_difference,
                 window_s: window,
                 report: response.report,
+                estimates: None,
             })
         })
         .collect()
@@ -490,10 +674,44 @@ pub struct PulseInversion {
     pub sum: Vec<Signal>,
     /// Reports of the two runs (empty when convolved).
     pub reports: Vec<RunReport>,
+    /// Per receiver, the estimate of the residual max|sum| / max|positive|, when the
+    /// responder has companions.
+    pub residual_estimates: Option<Vec<Estimate>>,
 }
 
-/// Transmits +s and -s (in parallel) and sums the responses (report Sec. 5.3).
+impl PulseInversion {
+    /// Per receiver, the residual max|sum| / max|positive|.
+    pub fn residuals(&self) -> Vec<f64> {
+        self.sum
+            .iter()
+            .zip(&self.positive)
+            .map(|(s, p)| s.max_abs() / p.max_abs())
+            .collect()
+    }
+}
+
+/// Transmits +s and -s (in parallel) and sums the responses (report Sec. 5.3), also on the
+/// responder's companions, with estimates of the residuals.
 pub fn pulse_inversion(
+    responder: &Responder,
+    s: &Signal,
+    duration_s: f64,
+) -> Result<PulseInversion> {
+    let mut main = pulse_inversion_once(responder, s, duration_s)?;
+    if let [medium, coarse] = &responder.companions[..] {
+        let fine = main.residuals();
+        let m = pulse_inversion_once(medium, s, duration_s)?.residuals();
+        let c = pulse_inversion_once(coarse, s, duration_s)?.residuals();
+        main.residual_estimates = Some(
+            (0..fine.len())
+                .map(|k| Estimate::scalar(fine[k], m[k], c[k], T3_ORDER))
+                .collect(),
+        );
+    }
+    Ok(main)
+}
+
+fn pulse_inversion_once(
     responder: &Responder,
     s: &Signal,
     duration_s: f64,
@@ -513,5 +731,6 @@ pub fn pulse_inversion(
         negative: n.traces,
         sum,
         reports,
+        residual_estimates: None,
     })
 }

@@ -1,0 +1,225 @@
+//! Discretisation error estimates by Richardson extrapolation.
+//!
+//! A quantity Q computed on the main discretisation (element sizes h, its own stable step)
+//! and on two companions with element sizes 2h and 4h (the same laminate draw, each with
+//! its own step) converges as Q_h = Q + C h^p + ... in the asymptotic range. Then
+//!
+//!   error(Q_h) ~ (Q_h - Q_2h) / (2^p - 1),
+//!   observed order q = log2(|Q_2h - Q_4h| / |Q_h - Q_2h|).
+//!
+//! The estimate is trusted only when q is close to the scheme's order p (|q - p| <= 0.5:
+//! then, if the error follows a power law, the estimate is within a factor 0.75..1.4 of the
+//! truth); otherwise the runs are not in the asymptotic range, the verdict says "refine"
+//! and no error is claimed. Waves that travel many wavelengths converge late (their phase
+//! error grows with distance), which is exactly when the check matters.
+//!
+//! For waveforms the differences are relative L2 norms over a window,
+//! d_1 = ||y_h - y_2h|| / ||y_h||, d_2 = ||y_2h - y_4h|| / ||y_h||, and the same formulas
+//! give the relative L2 error of y_h. Traces of the companions are resampled to the main
+//! run's step before they are compared.
+//!
+//! The refinement ratio is nominally 2; in a laminate whose thin layers get one element row
+//! at every size, or whose step is set by such a layer, the effective ratio is smaller. That
+//! shows as an observed order away from p, and the verdict says so.
+
+use crate::error::Result;
+use crate::signal::{self, Signal};
+use serde::Serialize;
+
+/// Order of convergence of linear triangles with lumped mass and central differences
+/// (dispersion error O(h^2) in space and O(dt^2) in time, dt tied to h).
+pub const T3_ORDER: f64 = 2.0;
+/// Largest |observed order - scheme order| for which an estimate is trusted.
+pub const ORDER_TOLERANCE: f64 = 0.5;
+/// Relative differences below this are round-off: the quantity does not depend on the mesh.
+const ROUND_OFF: f64 = 1e-10;
+
+/// What the companion runs say about an estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// The observed order is close to the scheme's: the estimate is reliable.
+    Reliable,
+    /// The runs are not in the asymptotic range: no error is claimed, refine.
+    Refine,
+    /// The quantity does not change between discretisations (to round-off).
+    MeshIndependent,
+}
+
+impl Verdict {
+    /// Words for printed results.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Verdict::Reliable => "estimate reliable",
+            Verdict::Refine => "not in the asymptotic range: refine",
+            Verdict::MeshIndependent => "unchanged between meshes",
+        }
+    }
+}
+
+/// A quantity with its discretisation error estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Estimate {
+    /// Value on the main discretisation (for a waveform: 0, the errors are relative).
+    pub value: f64,
+    /// Values on the companions with 2x and 4x the element sizes (waveforms: the relative
+    /// differences d_1 = |y_h - y_2h| and d_2 = |y_2h - y_4h| over |y_h|).
+    pub companions: [f64; 2],
+    /// Estimated |error| of `value` (waveforms: relative L2 error); `None` unless reliable.
+    pub error: Option<f64>,
+    /// Observed order of convergence, when the differences allow one.
+    pub observed_order: Option<f64>,
+    /// Whether to trust `error`.
+    pub verdict: Verdict,
+}
+
+impl Estimate {
+    /// Estimate for a scalar from its values at h, 2h, 4h (scheme order `order`).
+    pub fn scalar(fine: f64, medium: f64, coarse: f64, order: f64) -> Estimate {
+        let scale = fine.abs().max(medium.abs()).max(coarse.abs());
+        let (error, observed_order, verdict) =
+            classify((fine - medium).abs(), (medium - coarse).abs(), scale, order);
+        Estimate {
+            value: fine,
+            companions: [medium, coarse],
+            error,
+            observed_order,
+            verdict,
+        }
+    }
+
+    /// Estimate of a waveform's relative L2 error over `window` (s) from the traces at h, 2h,
+    /// 4h, the companions resampled to the main trace's step.
+    pub fn waveform(
+        fine: &Signal,
+        medium: &Signal,
+        coarse: &Signal,
+        window: (f64, f64),
+        order: f64,
+    ) -> Result<Estimate> {
+        let on_fine = |s: &Signal| -> Result<Signal> {
+            let r = signal::resample(s, fine.dt_s)?;
+            Ok(r.window(window.0, window.1)?)
+        };
+        let f = fine.window(window.0, window.1)?;
+        let (m, c) = (on_fine(medium)?, on_fine(coarse)?);
+        let n = f.len().min(m.len()).min(c.len());
+        let norm = |a: &[f64], b: &[f64]| -> f64 {
+            a[..n]
+                .iter()
+                .zip(&b[..n])
+                .map(|(x, y)| (x - y).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        };
+        let zero = vec![0.0; n];
+        let size = norm(&f.samples, &zero);
+        let (d1, d2) = if size > 0.0 {
+            (
+                norm(&f.samples, &m.samples) / size,
+                norm(&m.samples, &c.samples) / size,
+            )
+        } else {
+            (0.0, 0.0)
+        };
+        let (error, observed_order, verdict) = classify(d1, d2, 1.0, order);
+        Ok(Estimate {
+            value: 0.0,
+            companions: [d1, d2],
+            error,
+            observed_order,
+            verdict,
+        })
+    }
+
+    /// "1.23e-2 (error 4.5e-4, order 1.9)" or "1.23e-2 (error unknown: refine, ...)".
+    pub fn describe(&self) -> String {
+        let order = self
+            .observed_order
+            .map_or("-".to_string(), |q| format!("{q:.2}"));
+        match (self.verdict, self.error) {
+            (Verdict::Reliable, Some(e)) => {
+                format!("{:.4e} +- {e:.2e} (observed order {order})", self.value)
+            }
+            (Verdict::MeshIndependent, _) => format!("{:.4e} (unchanged between meshes)", self.value),
+            _ => format!(
+                "{:.4e} (error unknown, observed order {order}, change from 2h {:.2e}: refine)",
+                self.value,
+                (self.value - self.companions[0]).abs()
+            ),
+        }
+    }
+}
+
+/// (error, observed order, verdict) from the differences d1 = |Q_h - Q_2h| and
+/// d2 = |Q_2h - Q_4h| of a quantity of size `scale`.
+fn classify(d1: f64, d2: f64, scale: f64, order: f64) -> (Option<f64>, Option<f64>, Verdict) {
+    if d1 <= ROUND_OFF * scale && d2 <= ROUND_OFF * scale {
+        return (Some(d1), None, Verdict::MeshIndependent);
+    }
+    let observed = (d1 > 0.0 && d2 > 0.0).then(|| (d2 / d1).log2());
+    match observed {
+        Some(q) if (q - order).abs() <= ORDER_TOLERANCE => {
+            (Some(d1 / (2f64.powf(order) - 1.0)), Some(q), Verdict::Reliable)
+        }
+        _ => (None, observed, Verdict::Refine),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn power_law_gives_exact_richardson_error() {
+        // Q_h = 1 + 0.3 h^2: at h = 0.1 the error is 3e-3 and the estimate exact.
+        let q = |h: f64| 1.0 + 0.3 * h * h;
+        let e = Estimate::scalar(q(0.1), q(0.2), q(0.4), T3_ORDER);
+        assert_eq!(e.verdict, Verdict::Reliable);
+        assert!((e.error.unwrap() - 3e-3).abs() < 1e-12);
+        assert!((e.observed_order.unwrap() - 2.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn first_order_convergence_is_not_trusted_as_second() {
+        let q = |h: f64| 1.0 + 0.3 * h;
+        let e = Estimate::scalar(q(0.1), q(0.2), q(0.4), T3_ORDER);
+        assert_eq!(e.verdict, Verdict::Refine);
+        assert!(e.error.is_none());
+        assert!((e.observed_order.unwrap() - 1.0).abs() < 1e-9);
+        assert!(e.describe().contains("refine"));
+    }
+
+    #[test]
+    fn oscillating_or_constant_sequences() {
+        let e = Estimate::scalar(1.0, 1.2, 1.0, T3_ORDER);
+        assert_eq!(e.verdict, Verdict::Refine);
+        let c = Estimate::scalar(0.5, 0.5, 0.5, T3_ORDER);
+        assert_eq!(c.verdict, Verdict::MeshIndependent);
+        let z = Estimate::scalar(0.0, 0.0, 0.0, T3_ORDER);
+        assert_eq!(z.verdict, Verdict::MeshIndependent);
+    }
+
+    #[test]
+    fn waveform_of_a_shifted_pulse() {
+        // A pulse whose arrival is off by c h^2 (a phase error): the relative L2 error
+        // estimate from h, 2h, 4h is within 10% of the true one for small shifts.
+        let dt = 1e-9;
+        let pulse = |shift: f64| {
+            let samples = (0..4000)
+                .map(|k| {
+                    let t = k as f64 * dt - 2e-6 - shift;
+                    (-(t / 0.2e-6).powi(2)).exp() * (2.0 * std::f64::consts::PI * 2e6 * t).sin()
+                })
+                .collect();
+            Signal::new(dt, 0.0, samples).unwrap()
+        };
+        let shift = |h: f64| 2e-9 * h * h;
+        let (f, m, c) = (pulse(shift(1.0)), pulse(shift(2.0)), pulse(shift(4.0)));
+        let e = Estimate::waveform(&f, &m, &c, (0.0, 4e-6), T3_ORDER).unwrap();
+        let exact = pulse(0.0);
+        let truth = signal::relative_l2(&f, &exact, None).unwrap();
+        assert_eq!(e.verdict, Verdict::Reliable, "{e:?}");
+        assert!((e.error.unwrap() / truth - 1.0).abs() < 0.1, "{e:?} vs {truth}");
+    }
+}
