@@ -60,6 +60,8 @@ impl Verdict {
 /// A quantity with its discretisation error estimate.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Estimate {
+    /// Whether this is a waveform's relative L2 error (true) or a scalar's error.
+    pub waveform: bool,
     /// Value on the main discretisation (for a waveform: 0, the errors are relative).
     pub value: f64,
     /// Values on the companions with 2x and 4x the element sizes (waveforms: the relative
@@ -77,9 +79,22 @@ impl Estimate {
     /// Estimate for a scalar from its values at h, 2h, 4h (scheme order `order`).
     pub fn scalar(fine: f64, medium: f64, coarse: f64, order: f64) -> Estimate {
         let scale = fine.abs().max(medium.abs()).max(coarse.abs());
+        Self::with_scale(fine, medium, coarse, scale, order)
+    }
+
+    /// Estimate for a dimensionless measure of order one (a misfit, a residual, an
+    /// asymmetry): changes below 1e-10 in absolute terms are round-off, so a measure that is
+    /// round-off at every resolution (a linear scene's misfit) is mesh-independent.
+    pub fn dimensionless(fine: f64, medium: f64, coarse: f64, order: f64) -> Estimate {
+        let scale = fine.abs().max(medium.abs()).max(coarse.abs()).max(1.0);
+        Self::with_scale(fine, medium, coarse, scale, order)
+    }
+
+    fn with_scale(fine: f64, medium: f64, coarse: f64, scale: f64, order: f64) -> Estimate {
         let (error, observed_order, verdict) =
             classify((fine - medium).abs(), (medium - coarse).abs(), scale, order);
         Estimate {
+            waveform: false,
             value: fine,
             companions: [medium, coarse],
             error,
@@ -124,6 +139,7 @@ impl Estimate {
         };
         let (error, observed_order, verdict) = classify(d1, d2, 1.0, order);
         Ok(Estimate {
+            waveform: true,
             value: 0.0,
             companions: [d1, d2],
             error,
@@ -132,11 +148,24 @@ impl Estimate {
         })
     }
 
-    /// "1.23e-2 (error 4.5e-4, order 1.9)" or "1.23e-2 (error unknown: refine, ...)".
+    /// "1.2300e-2 +- 4.50e-4 (observed order 1.90)", "... (error unknown, ...: refine)";
+    /// for a waveform "relative L2 error 3.1e-2 (observed order 1.95)" or why unknown.
     pub fn describe(&self) -> String {
         let order = self
             .observed_order
             .map_or("-".to_string(), |q| format!("{q:.2}"));
+        if self.waveform {
+            return match (self.verdict, self.error) {
+                (Verdict::Reliable, Some(e)) => {
+                    format!("relative L2 error {e:.2e} (observed order {order})")
+                }
+                (Verdict::MeshIndependent, _) => "unchanged between meshes".into(),
+                _ => format!(
+                    "relative L2 error unknown (h vs 2h differ by {:.2e}, observed order {order}): refine",
+                    self.companions[0]
+                ),
+            };
+        }
         match (self.verdict, self.error) {
             (Verdict::Reliable, Some(e)) => {
                 format!("{:.4e} +- {e:.2e} (observed order {order})", self.value)

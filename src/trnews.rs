@@ -318,6 +318,8 @@ pub struct TrNews {
     pub chirp_report: Option<RunReport>,
     /// The same procedure on the error estimate's companions (2h, 4h), if any.
     pub companions: Vec<TrNews>,
+    /// The transducer band every signal was seen through ("no band (raw)" without one).
+    pub band: String,
 }
 
 impl TrNewsSpec {
@@ -395,10 +397,15 @@ fn focus_estimates(fine: &TrNews, medium: &TrNews, coarse: &TrNews, i: usize) ->
         )?,
         peak_amplitude: scalar(&|x| x.peak.amplitude),
         peak_time_s: scalar(&|x| x.peak.time_s),
-        side_lobe_asymmetry: scalar(&|x| x.side_lobes.asymmetry),
+        side_lobe_asymmetry: Estimate::dimensionless(
+            f[0].side_lobes.asymmetry,
+            f[1].side_lobes.asymmetry,
+            f[2].side_lobes.asymmetry,
+            T3_ORDER,
+        ),
         main_to_side_db: scalar(&|x| x.side_lobes.main_to_side_db),
         pi_residual: match f.map(Focus::pi_residual) {
-            [Some(a), Some(b), Some(c)] => Some(Estimate::scalar(a, b, c, T3_ORDER)),
+            [Some(a), Some(b), Some(c)] => Some(Estimate::dimensionless(a, b, c, T3_ORDER)),
             _ => None,
         },
     })
@@ -480,6 +487,7 @@ fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
         focus,
         chirp_report: first.report,
         companions: Vec::new(),
+        band: crate::transducer::band_label(responder.scene.spec.transducer.as_ref()),
     })
 }
 
@@ -576,8 +584,8 @@ pub fn delayed_tr_news(
     let (medium, coarse) = (on(rm, tm)?, on(rc, tc)?);
     for ((d, m), c) in main.iter_mut().zip(&medium).zip(&coarse) {
         d.estimates = Some(DelayedEstimates {
-            misfit: Estimate::scalar(d.misfit, m.misfit, c.misfit, T3_ORDER),
-            peak_difference: Estimate::scalar(
+            misfit: Estimate::dimensionless(d.misfit, m.misfit, c.misfit, T3_ORDER),
+            peak_difference: Estimate::dimensionless(
                 d.peak_difference,
                 m.peak_difference,
                 c.peak_difference,
@@ -704,7 +712,7 @@ pub fn pulse_inversion(
         let c = pulse_inversion_once(coarse, s, duration_s)?.residuals();
         main.residual_estimates = Some(
             (0..fine.len())
-                .map(|k| Estimate::scalar(fine[k], m[k], c[k], T3_ORDER))
+                .map(|k| Estimate::dimensionless(fine[k], m[k], c[k], T3_ORDER))
                 .collect(),
         );
     }

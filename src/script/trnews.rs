@@ -1,6 +1,7 @@
 //! Rhai module `trnews`: the TR-NEWS procedure, delayed TR-NEWS and pulse inversion.
 //! Types: `Responder`, `TrNews`, `Focus`, `Delayed`.
 
+use crate::accuracy::Estimate;
 use crate::script::convert::{error, floats, ScriptResult};
 use crate::trnews::{Delayed, Focus, Responder, TrNews};
 use rhai::plugin::*;
@@ -16,7 +17,26 @@ pub fn register_types(engine: &mut Engine) {
         .register_type_with_name::<Responder>("Responder")
         .register_type_with_name::<TrNewsRef>("TrNews")
         .register_type_with_name::<Focus>("Focus")
-        .register_type_with_name::<Delayed>("Delayed");
+        .register_type_with_name::<Delayed>("Delayed")
+        .register_type_with_name::<Estimate>("Estimate");
+}
+
+/// Options of `trnews::responder(scene, duration_s, options)`.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ResponderOptions {
+    /// Repeat every procedure on companions with 2x and 4x the element sizes and report
+    /// Richardson error estimates (see `accuracy`).
+    pub error_estimate: bool,
+}
+
+/// A map of named estimates as Rhai values.
+fn estimate_map(entries: Vec<(&str, Estimate)>) -> Dynamic {
+    entries
+        .into_iter()
+        .map(|(k, e)| (k.into(), Dynamic::from(e)))
+        .collect::<Map>()
+        .into()
 }
 
 /// The `trnews` module.
@@ -72,7 +92,8 @@ fn response_map(ctx: &NativeCallContext, out: crate::trnews::Response) -> Script
 
 #[export_module]
 mod trnews_api {
-    use super::{points, TrNewsRef};
+    use super::{estimate_map, points, ResponderOptions, TrNewsRef};
+    use crate::accuracy::Estimate;
     use crate::script::convert::{options, to_dynamic, WithPosition};
     use crate::script::scene::{index, SceneRef};
     use crate::signal::Signal;
@@ -339,6 +360,12 @@ mod trnews_api {
         m.insert("positive".into(), list(pi.positive));
         m.insert("negative".into(), list(pi.negative));
         m.insert("sum".into(), list(pi.sum));
+        m.insert(
+            "residual_estimates".into(),
+            pi.residual_estimates.map_or(Dynamic::UNIT, |v| {
+                v.into_iter().map(Dynamic::from).collect::<Array>().into()
+            }),
+        );
         Ok(m.into())
     }
 
@@ -352,5 +379,112 @@ mod trnews_api {
     #[rhai_fn(global, pure, return_raw)]
     pub fn response(ctx: NativeCallContext, tr: &mut TrNewsRef, k: INT) -> Res<Signal> {
         Ok(tr.responses[index(&ctx, k, tr.responses.len(), "receiver")?].clone())
+    }
+
+    /// A responder with options #{error_estimate}: with `error_estimate: true` it also builds the scene with 2x and 4x the element sizes (same laminate draw), repeats every procedure on them (about 1/8 + 1/64 of the cost where every layer coarsens) and attaches Richardson error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
+    #[rhai_fn(name = "responder", return_raw)]
+    pub fn responder_with(
+        ctx: NativeCallContext,
+        scene: SceneRef,
+        duration_s: FLOAT,
+        settings: Map,
+    ) -> Res<Responder> {
+        let o: ResponderOptions =
+            options(&ctx, settings, &ResponderOptions::default(), "responder")?;
+        let r = Responder::new(scene, duration_s).at(&ctx)?;
+        if o.error_estimate {
+            r.with_error_estimate(duration_s).at(&ctx)
+        } else {
+            Ok(r)
+        }
+    }
+
+    /// True when the responder repeats its procedures on coarser companions for error estimates.
+    #[rhai_fn(global, get = "error_estimate", pure)]
+    pub fn has_error_estimate(r: &mut Responder) -> bool {
+        !r.companions().is_empty()
+    }
+
+    /// The transducer band of the responses, e.g. "0.2-2 MHz band", or "no band (raw)".
+    #[rhai_fn(global, get = "band", pure)]
+    pub fn band(tr: &mut TrNewsRef) -> String {
+        tr.band.clone()
+    }
+
+    /// Error estimates of the focus as #{response, focused, peak_amplitude, peak_time_s, side_lobe_asymmetry, main_to_side_db, pi_residual} (Estimate objects; waveforms as relative L2), or () without an error estimate.
+    #[rhai_fn(global, get = "estimates", pure)]
+    pub fn focus_estimates(f: &mut Focus) -> Dynamic {
+        let Some(e) = &f.estimates else {
+            return Dynamic::UNIT;
+        };
+        let mut entries = vec![
+            ("response", e.response),
+            ("focused", e.focused),
+            ("peak_amplitude", e.peak_amplitude),
+            ("peak_time_s", e.peak_time_s),
+            ("side_lobe_asymmetry", e.side_lobe_asymmetry),
+            ("main_to_side_db", e.main_to_side_db),
+        ];
+        entries.extend(e.pi_residual.map(|p| ("pi_residual", p)));
+        estimate_map(entries)
+    }
+
+    /// Pulse-inversion residual max|PI sum| / max|y_TR|, or () without pulse inversion.
+    #[rhai_fn(global, get = "pi_residual", pure)]
+    pub fn pi_residual(f: &mut Focus) -> Dynamic {
+        f.pi_residual().map_or(Dynamic::UNIT, Dynamic::from)
+    }
+
+    /// Error estimates of a delayed point as #{misfit, peak_difference, simulation}, or () without an error estimate.
+    #[rhai_fn(global, get = "estimates", pure)]
+    pub fn delayed_estimates(d: &mut Delayed) -> Dynamic {
+        d.estimates.as_ref().map_or(Dynamic::UNIT, |e| {
+            estimate_map(vec![
+                ("misfit", e.misfit),
+                ("peak_difference", e.peak_difference),
+                ("simulation", e.simulation),
+            ])
+        })
+    }
+
+    /// Value on the main discretisation (0 for a waveform, whose error is relative).
+    #[rhai_fn(global, get = "value", pure)]
+    pub fn estimate_value(e: &mut Estimate) -> FLOAT {
+        e.value
+    }
+
+    /// Estimated |error| of the value (waveforms: relative L2), or () unless the verdict is reliable.
+    #[rhai_fn(global, get = "error", pure)]
+    pub fn estimate_error(e: &mut Estimate) -> Dynamic {
+        e.error.map_or(Dynamic::UNIT, Dynamic::from)
+    }
+
+    /// Observed order of convergence from the three discretisations, or ().
+    #[rhai_fn(global, get = "observed_order", pure)]
+    pub fn estimate_order(e: &mut Estimate) -> Dynamic {
+        e.observed_order.map_or(Dynamic::UNIT, Dynamic::from)
+    }
+
+    /// Values on the companions [2h, 4h] (waveforms: relative differences [h vs 2h, 2h vs 4h]).
+    #[rhai_fn(global, get = "companions", pure)]
+    pub fn estimate_companions(e: &mut Estimate) -> Array {
+        e.companions.iter().map(|&v| Dynamic::from(v)).collect()
+    }
+
+    /// "reliable", "refine" or "mesh_independent".
+    #[rhai_fn(global, get = "verdict", pure)]
+    pub fn estimate_verdict(e: &mut Estimate) -> String {
+        match e.verdict {
+            crate::accuracy::Verdict::Reliable => "reliable",
+            crate::accuracy::Verdict::Refine => "refine",
+            crate::accuracy::Verdict::MeshIndependent => "mesh_independent",
+        }
+        .into()
+    }
+
+    /// The estimate in words: value +- error with the observed order, or why no error is claimed.
+    #[rhai_fn(global, name = "to_string", pure)]
+    pub fn estimate_to_string(e: &mut Estimate) -> String {
+        e.describe()
     }
 }

@@ -1,0 +1,140 @@
+//! The Richardson error estimate against the true error, on plane P waves with exact
+//! solutions: a homogeneous epoxy strip and an epoxy / 0-90 fabric stack.
+
+mod common;
+use common::*;
+use trnews::accuracy::{Estimate, Verdict, T3_ORDER};
+use trnews::fem::Model;
+use trnews::laminate::{Laminate, Layer};
+use trnews::material::Material;
+use trnews::mesh::{Mesh, Side};
+use trnews::signal::Signal;
+use trnews::solve::{run, segment_receiver, traction_source, Quantity, RunConfig};
+
+/// Gaussian load width (s) and centre (4 widths): spectrum down to 1e-4 of its peak at
+/// 4.3 MHz, so 100 um elements carry only ~6 per shortest wavelength in epoxy.
+const WIDTH: f64 = 0.1e-6;
+
+fn load(t: f64) -> f64 {
+    (-((t - 4.0 * WIDTH) / WIDTH).powi(2)).exp()
+}
+
+/// A strip of layers (top first: material, thickness), two square elements of size h wide,
+/// rollers on the sides, absorbing bottom: a uniform top traction launches a plane P wave.
+fn strip(layers: &[(Material, f64)], h: f64) -> Model {
+    let materials = layers.iter().map(|l| l.0.clone()).collect();
+    let stack = layers
+        .iter()
+        .enumerate()
+        .rev()
+        .map(|(i, l)| Layer {
+            material: i,
+            thickness_m: l.1,
+        })
+        .collect();
+    let lam = Laminate::from_layers(materials, stack).unwrap();
+    let mesh = Mesh::layered(&lam, 2.0 * h, h, h, &[], &[]).unwrap();
+    let rollers = [Side::Left, Side::Right]
+        .iter()
+        .flat_map(|&s| mesh.side_nodes(s))
+        .map(|n| 2 * n)
+        .collect();
+    Model::build(mesh, lam.materials, &[Side::Bottom.into()], rollers, None).unwrap()
+}
+
+/// Velocity u_y at `depth` below the top for a unit-pressure Gaussian load, at 0.9 dt_crit.
+fn trace(layers: &[(Material, f64)], h: f64, depth: f64, duration: f64) -> Signal {
+    let model = strip(layers, h);
+    let (x0, x1, _, y1) = model.mesh.bounds();
+    let y = y1 - depth;
+    let receiver =
+        segment_receiver(&model.mesh, "r", [x0, y], [x1, y], 1, Quantity::Velocity).unwrap();
+    let dt = 0.9 * trnews::solve::stability::estimate(&model).dt_crit_s;
+    let n = (duration / dt).ceil() as usize + 1;
+    let samples = (0..n).map(|k| load(k as f64 * dt)).collect();
+    let signal = Signal::new(dt, 0.0, samples).unwrap();
+    let src = traction_source(&model.mesh, [x0, y1], [x1, y1], 270.0, signal).unwrap();
+    let cfg = RunConfig {
+        duration_s: duration,
+        dt_s: Some(dt),
+        ..Default::default()
+    };
+    run(&model, &[src], &[receiver], &cfg).unwrap().traces.remove(0)
+}
+
+/// (estimate, true relative L2 error of the finest trace) for sizes h, 2h, 4h.
+fn estimate_and_truth(
+    layers: &[(Material, f64)],
+    h: f64,
+    depth: f64,
+    duration: f64,
+    exact: impl Fn(f64) -> f64,
+) -> (Estimate, f64) {
+    let [fine, medium, coarse] = [h, 2.0 * h, 4.0 * h].map(|s| trace(layers, s, depth, duration));
+    let window = (0.0, fine.t_end_s());
+    let e = Estimate::waveform(&fine, &medium, &coarse, window, T3_ORDER).unwrap();
+    let truth = Signal::new(
+        fine.dt_s,
+        0.0,
+        (0..fine.len()).map(|k| exact(fine.time_at(k))).collect(),
+    )
+    .unwrap();
+    let err = trnews::signal::relative_l2(&fine, &truth, None).unwrap();
+    (e, err)
+}
+
+/// The issue's bound: a reliable estimate within a factor 2 of the true error.
+fn check_reliable(name: &str, (e, truth): (Estimate, f64)) {
+    println!("{name}: {} vs true {truth:.3e}", e.describe());
+    assert_eq!(e.verdict, Verdict::Reliable, "{name}: {e:?}");
+    let ratio = e.error.unwrap() / truth;
+    assert!((0.5..=2.0).contains(&ratio), "{name}: estimate / truth = {ratio}");
+}
+
+fn check_refine(name: &str, (e, truth): (Estimate, f64)) {
+    println!("{name}: {} vs true {truth:.3e}", e.describe());
+    assert_eq!(e.verdict, Verdict::Refine, "{name}: {e:?}");
+}
+
+#[test]
+fn estimate_tracks_the_true_error_of_a_plane_wave_and_refuses_a_coarse_mesh() {
+    // v(t, d) = -p(t - d / c) / (rho c) in a homogeneous strip (no reflection in the window).
+    let e = epoxy();
+    let (c, z) = (e.wave_speeds().p_y_m_s, e.impedance_p_y());
+    let depth = 2e-3;
+    let duration = depth / c + 8.0 * WIDTH;
+    let layers = [(e, 4e-3)];
+    let exact = |t: f64| -load(t - depth / c) / z;
+    check_reliable(
+        "plane wave, h = 12.5 um",
+        estimate_and_truth(&layers, 12.5e-6, depth, duration, exact),
+    );
+    check_refine(
+        "plane wave, h = 100 um",
+        estimate_and_truth(&layers, 100e-6, depth, duration, exact),
+    );
+}
+
+#[test]
+fn estimate_tracks_the_true_error_through_a_layer_interface() {
+    // Epoxy (2 mm) over 0/90 fabric: at 1.6 mm into the fabric the exact velocity is the
+    // transmitted wave T_v (-p(t - d1/c1 - d2/c2) / Z1), T_v = 2 Z1 / (Z1 + Z2), until the
+    // interface reflection, bounced off the top, arrives 2 d1 / c1 = 1.56 us later.
+    let (e, f) = (epoxy(), fabric());
+    let (c1, c2) = (e.wave_speeds().p_y_m_s, f.wave_speeds().p_y_m_s);
+    let (z1, z2) = (e.impedance_p_y(), f.impedance_p_y());
+    let (d1, d2) = (2e-3, 1.6e-3);
+    let arrival = d1 / c1 + d2 / c2;
+    let duration = arrival + 8.0 * WIDTH;
+    let layers = [(e, d1), (f, 8e-3)];
+    let t_v = 2.0 * z1 / (z1 + z2);
+    let exact = |t: f64| -t_v * load(t - arrival) / z1;
+    check_reliable(
+        "layered, h = 12.5 um",
+        estimate_and_truth(&layers, 12.5e-6, d1 + d2, duration, exact),
+    );
+    check_refine(
+        "layered, h = 100 um",
+        estimate_and_truth(&layers, 100e-6, d1 + d2, duration, exact),
+    );
+}
