@@ -107,8 +107,7 @@ fn error_of(crack: CrackSpec) -> String {
         crack: Some(crack),
         ..SceneSpec::smoke()
     })
-    .err()
-    .expect("the crack must be refused")
+    .expect_err("the crack must be refused")
     .to_string()
 }
 
