@@ -19,6 +19,7 @@ use trnews::fem::{element, Model, StiffnessOperator};
 use trnews::laminate::{Laminate, StochasticSpec};
 use trnews::material::{Material, Plane};
 use trnews::mesh::{Mesh, Side};
+use trnews::scene::{Scene, SceneSpec};
 use trnews::signal::Signal;
 use trnews::solve::{
     self, segment_receiver, traction_source, Quantity, RunConfig, Source, StabilityEstimate,
@@ -51,16 +52,26 @@ struct StepRow {
     reps: usize,
 }
 
+/// The default scene vs its uncracked companion (same mesh, same dt): the cost of the
+/// crack for the same simulated duration is the ratio of the times per step.
 #[derive(Serialize)]
 struct CrackRow {
     dofs_cracked: usize,
     dofs_uncracked: usize,
     threads: usize,
     steps: usize,
+    dt_s: f64,
+    dt_crit_cracked_s: f64,
+    dt_crit_uncracked_s: f64,
+    stencil_fraction_cracked: f64,
+    stencil_fraction_uncracked: f64,
     cracked_ns_per_dof_step: f64,
     uncracked_ns_per_dof_step: f64,
     cracked_ms_per_step: f64,
     uncracked_ms_per_step: f64,
+    /// Cracked / uncracked time per step = time for the same duration.
+    duration_cost_ratio: f64,
+    /// Per DOF and step (the cracked model has the crack's duplicated nodes more).
     overhead_percent: f64,
     crack_pairs: usize,
     steps_in_contact: usize,
@@ -467,107 +478,118 @@ fn main() {
     }
 
     // --- crack overhead ---------------------------------------------------------------
-    // The default scene geometry (crack 2 mm long, 2 mm deep under x = 8 mm) at the default
-    // resolution (60 um x 40 um): the same mesh (it conforms to the crack line and tips in
-    // both cases) with and without the crack. A point force on the middle of the crack's
-    // upper face, directed at 110 degrees, makes the faces clap and slide.
-    let crack_steps = if quick { 100 } else { 400 };
-    let (hx, hy) = (60e-6, 40e-6);
-    let (yc, x0, x1) = (height - 2e-3, 7e-3, 9e-3);
-    let base = Mesh::layered(&lam, WIDTH_M, hx, hy, &[x0, x1], &[yc]).unwrap();
-    let (yc, x0, x1) = (
-        base.nearest_row_y(yc).unwrap(),
-        base.nearest_column_x(x0).unwrap(),
-        base.nearest_column_x(x1).unwrap(),
-    );
-    let mut cracked_mesh = base.clone();
-    let crack = cracked_mesh.insert_crack(yc, x0, x1).unwrap();
-    let mid = crack.pairs[crack.pairs.len() / 2].master;
-    let fixed = fixed_corners(&cracked_mesh);
-    let cracked = Model::build(
-        cracked_mesh,
-        lam.materials.clone(),
-        &[Side::Bottom.into(), Side::Left.into()],
-        fixed,
-        Some(crack),
-    )
-    .unwrap();
-    let plain = build_model(&lam, base);
-    let dt = 0.9 * element_dt_bound(&cracked).min(element_dt_bound(&plain));
-    let (s, c) = 110f64.to_radians().sin_cos();
-    // 1 N/m on one node at up to 2 MHz: strong enough to open and close the faces.
-    let mut force = chirp_signal(dt, crack_steps, 1.0);
-    force
-        .samples
-        .iter_mut()
-        .for_each(|v| *v = v.abs().max(0.2) * v.signum());
-    let point = Source {
-        weights: vec![(2 * mid, c), (2 * mid + 1, s)],
-        signal: force,
-    };
-    let receiver = segment_receiver(
-        &plain.mesh,
-        "r3",
-        [8e-3, height],
-        [8e-3, height],
-        1,
-        Quantity::Displacement,
-    )
-    .unwrap();
-    let (sources, receivers) = ([point], [receiver]);
-    let contact = Some(ContactOptions::default());
+    // The default scene (crack 2 mm long, 2 mm deep under x = 8 mm, 60 um x 40 um elements)
+    // and its uncracked companion: one mesh (the crack snaps onto it) and one time step, so
+    // the cost ratio per step is the cost ratio for the same duration. A point force on the
+    // middle of the crack's upper face, directed at 110 degrees, makes the faces clap and
+    // slide from the first steps.
     let mut crack_rows = Vec::new();
-    println!("\nCrack overhead (default scene, {} DOFs, contact with friction 0.6, best of {reps} x {crack_steps} steps):", cracked.dofs());
-    println!(
-        "  {:>8} {:>14} {:>14} {:>10} {:>16} {:>13}",
-        "threads", "cracked ns/DOF", "plain ns/DOF", "overhead", "steps in contact", "max slipping"
-    );
-    for &threads in thread_counts.iter().filter(|_| run_section("crack")) {
-        let (tc, tp, report) = pool(threads).install(|| {
-            timed_run(&cracked, &sources, &receivers, dt, crack_steps / 4, contact);
-            timed_run(&plain, &sources, &receivers, dt, crack_steps / 4, None);
-            let mut tc = f64::INFINITY;
-            let mut tp = f64::INFINITY;
-            let mut report = None;
-            // interleave the two so that machine noise hits both alike
-            for _ in 0..reps {
-                let (t, out) = timed_run(&cracked, &sources, &receivers, dt, crack_steps, contact);
-                tc = tc.min(t);
-                report = out.report.contact;
-                tp = tp.min(timed_run(&plain, &sources, &receivers, dt, crack_steps, None).0);
-            }
-            (tc, tp, report.expect("contact report"))
-        });
-        let nc = tc * 1e9 / cracked.dofs() as f64;
-        let np = tp * 1e9 / plain.dofs() as f64;
-        let overhead = 100.0 * (nc / np - 1.0);
-        let slipping = report.slipping.iter().copied().max().unwrap_or(0);
+    if run_section("crack") {
+        let crack_steps = if quick { 100 } else { 400 };
+        let spec = SceneSpec::default();
+        let cracked_scene = Scene::build(&spec).expect("default scene");
+        let plain_scene = Scene::build(&spec.uncracked()).expect("uncracked default scene");
+        let (cracked, plain) = (&cracked_scene.model, &plain_scene.model);
+        let dt = cracked_scene.default_dt_s();
+        assert_eq!(dt, plain_scene.default_dt_s(), "the companions share dt");
+        let crack = cracked
+            .crack
+            .as_ref()
+            .expect("the default scene is cracked");
+        let mid = crack.pairs[crack.pairs.len() / 2].master;
+        let (s, c) = 110f64.to_radians().sin_cos();
+        // 1 N/m on one node at up to 2 MHz: strong enough to open and close the faces.
+        let mut force = chirp_signal(dt, crack_steps, 1.0);
+        force
+            .samples
+            .iter_mut()
+            .for_each(|v| *v = v.abs().max(0.2) * v.signum());
+        let sources = [Source {
+            weights: vec![(2 * mid, c), (2 * mid + 1, s)],
+            signal: force,
+        }];
+        let receivers = [plain_scene.receivers[2].clone()];
+        let contact = cracked_scene.contact;
+        let fraction = |m: &Model| StiffnessOperator::new(m).stencil_fraction();
+        let (fc, fp) = (fraction(cracked), fraction(plain));
         println!(
-            "  {:>8} {:>14.3} {:>14.3} {:>9.1}% {:>16} {:>13}",
-            threads, nc, np, overhead, report.steps_in_contact, slipping
+            "\nCrack overhead (default scene {} DOFs vs uncracked companion {} DOFs, dt {:.4e} s for both, stencil fraction {:.4} vs {:.4}; contact with friction 0.6; best of {reps} x {crack_steps} steps):",
+            cracked.dofs(),
+            plain.dofs(),
+            dt,
+            fc,
+            fp
         );
-        crack_rows.push(CrackRow {
-            dofs_cracked: cracked.dofs(),
-            dofs_uncracked: plain.dofs(),
-            threads,
-            steps: crack_steps,
-            cracked_ns_per_dof_step: nc,
-            uncracked_ns_per_dof_step: np,
-            cracked_ms_per_step: tc * 1e3,
-            uncracked_ms_per_step: tp * 1e3,
-            overhead_percent: overhead,
-            crack_pairs: cracked.crack.as_ref().map_or(0, |c| c.pairs.len()),
-            steps_in_contact: report.steps_in_contact,
-            max_pairs_slipping: slipping,
-        });
+        println!(
+            "  {:>8} {:>14} {:>14} {:>10} {:>14} {:>16} {:>13}",
+            "threads",
+            "cracked ns/DOF",
+            "plain ns/DOF",
+            "overhead",
+            "same duration",
+            "steps in contact",
+            "max slipping"
+        );
+        for &threads in &thread_counts {
+            let (tc, tp, report) = pool(threads).install(|| {
+                timed_run(cracked, &sources, &receivers, dt, crack_steps / 4, contact);
+                timed_run(plain, &sources, &receivers, dt, crack_steps / 4, None);
+                let mut tc = f64::INFINITY;
+                let mut tp = f64::INFINITY;
+                let mut report = None;
+                // interleave the two so that machine noise hits both alike
+                for _ in 0..reps {
+                    let (t, out) =
+                        timed_run(cracked, &sources, &receivers, dt, crack_steps, contact);
+                    tc = tc.min(t);
+                    report = out.report.contact;
+                    tp = tp.min(timed_run(plain, &sources, &receivers, dt, crack_steps, None).0);
+                }
+                (tc, tp, report.expect("contact report"))
+            });
+            let nc = tc * 1e9 / cracked.dofs() as f64;
+            let np = tp * 1e9 / plain.dofs() as f64;
+            let overhead = 100.0 * (nc / np - 1.0);
+            let slipping = report.slipping.iter().copied().max().unwrap_or(0);
+            println!(
+                "  {:>8} {:>14.3} {:>14.3} {:>9.1}% {:>13.3}x {:>16} {:>13}",
+                threads,
+                nc,
+                np,
+                overhead,
+                tc / tp,
+                report.steps_in_contact,
+                slipping
+            );
+            crack_rows.push(CrackRow {
+                dofs_cracked: cracked.dofs(),
+                dofs_uncracked: plain.dofs(),
+                threads,
+                steps: crack_steps,
+                dt_s: dt,
+                dt_crit_cracked_s: cracked_scene.stability.dt_crit_s,
+                dt_crit_uncracked_s: plain_scene.stability.dt_crit_s,
+                stencil_fraction_cracked: fc,
+                stencil_fraction_uncracked: fp,
+                cracked_ns_per_dof_step: nc,
+                uncracked_ns_per_dof_step: np,
+                cracked_ms_per_step: tc * 1e3,
+                uncracked_ms_per_step: tp * 1e3,
+                duration_cost_ratio: tc / tp,
+                overhead_percent: overhead,
+                crack_pairs: crack.pairs.len(),
+                steps_in_contact: report.steps_in_contact,
+                max_pairs_slipping: slipping,
+            });
+        }
     }
 
     // --- linear sweep: one impulse response vs one simulation per point ---------------------
     let mut sweep_rows = Vec::new();
     if run_section("sweep") {
         let points = if quick { 10 } else { 50 };
-        let spec = trnews::scene::SceneSpec::smoke().uncracked();
-        let scene = std::sync::Arc::new(trnews::scene::Scene::build(&spec).expect("smoke scene"));
+        let spec = SceneSpec::smoke().uncracked();
+        let scene = std::sync::Arc::new(Scene::build(&spec).expect("smoke scene"));
         let duration = tr::TrNewsSpec::smoke().focus_duration_s() + 3e-6;
         let clock = Instant::now();
         let convolving = tr::Responder::new(scene.clone(), duration).expect("impulse response");

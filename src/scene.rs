@@ -136,17 +136,26 @@ pub enum Absorber {
 }
 
 /// A horizontal crack with contacting faces (report Sec. 4.9).
+///
+/// The crack never changes the discretisation: the mesh is the one built without it, the
+/// crack line snaps to the nearest interior element row line and each tip to the nearest
+/// interior column line, each within half the local row height / column width (see
+/// [`crate::mesh::Grid::snap_row`]); [`Scene::crack_placement`] reports where it went.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CrackSpec {
-    /// Depth below the top surface (m); snapped to the nearest mesh row line.
+    /// Depth below the top surface (m); snapped to the nearest interior mesh row line.
     pub depth_m: f64,
-    /// x of the crack centre (m); `None` puts it under the middle receiver.
+    /// x of the crack centre (m); `None` puts it under the middle receiver. The tips
+    /// x_center_m -+ length_m / 2 snap to the nearest interior column lines.
     pub x_center_m: Option<f64>,
     /// Length (m).
     pub length_m: f64,
     /// Contact on the faces; `None` leaves the crack open (faces pass freely).
     pub contact: Option<ContactOptions>,
+    /// Faces tied: no node is split, so the model is the uncracked laminate on the cracked
+    /// scene's mesh, run with the cracked scene's time step ([`SceneSpec::uncracked`]).
+    pub tied: bool,
 }
 
 impl Default for CrackSpec {
@@ -156,6 +165,7 @@ impl Default for CrackSpec {
             x_center_m: None,
             length_m: 2e-3,
             contact: Some(ContactOptions::default()),
+            tied: false,
         }
     }
 }
@@ -282,10 +292,17 @@ impl SceneSpec {
         }
     }
 
-    /// The same scene without its crack.
+    /// The uncracked companion: the same scene with the crack's faces tied. It has the same
+    /// mesh as the cracked scene (nodes, rows, columns; only the crack's duplicated nodes are
+    /// missing) and the same time step (see [`Scene::build`]), so that cracked-vs-uncracked
+    /// comparisons differ only by the crack. `crack: None` instead gives the laminate alone
+    /// with its own stability estimate.
     pub fn uncracked(&self) -> SceneSpec {
         SceneSpec {
-            crack: None,
+            crack: self.crack.as_ref().map(|c| CrackSpec {
+                tied: true,
+                ..c.clone()
+            }),
             ..self.clone()
         }
     }
@@ -304,8 +321,10 @@ pub struct Scene {
     pub transmitter: Vec<(usize, f64)>,
     /// Receivers 1..n.
     pub receivers: Vec<Receiver>,
-    /// Contact options of the crack (None: no crack, or an open crack).
+    /// Contact options of the crack (None: no crack, an open crack, or tied faces).
     pub contact: Option<ContactOptions>,
+    /// Where the crack was put on the mesh, requested vs used (None without a crack).
+    pub crack_placement: Option<CrackPlacement>,
     /// Explicit stability estimate, computed once.
     pub stability: StabilityEstimate,
 }
@@ -340,41 +359,37 @@ fn build_laminate(spec: &LaminateSpec, plane: Plane) -> Result<Laminate> {
 }
 
 impl Scene {
-    /// Builds the scene: laminate, layer-conforming mesh (conforming also to the crack), the
-    /// crack's node pairs, K, M, dashpots, transmitter, receivers, and the stability estimate.
+    /// Builds the scene: laminate, layer-conforming mesh, the crack's node pairs, K, M,
+    /// dashpots, transmitter, receivers, and the stability estimate.
+    ///
+    /// The mesh does not depend on the crack (it is snapped onto the mesh lines, see
+    /// [`CrackSpec`]). A cracked scene and its tied companion ([`SceneSpec::uncracked`])
+    /// share one time step: both take the Lanczos estimate of the cracked (split) model.
+    /// That is the smaller limit of the two: tying the faces restricts the split model to
+    /// the subspace u_master = u_slave (K_tied = T^T K T and, with row-sum lumping,
+    /// M_tied = T^T M T), so by the Rayleigh-quotient (Courant-Fischer) principle
+    /// omega_max(tied) <= omega_max(split), and contact by exact multipliers only constrains
+    /// the split model further (report Sec. 4.8.2, 4.9).
     pub fn build(spec: &SceneSpec) -> Result<Scene> {
         require_positive("width_m", spec.width_m)?;
         let laminate = build_laminate(&spec.laminate, spec.plane)?;
         let height = laminate.thickness_m();
-        let crack_geometry = spec
-            .crack
-            .as_ref()
-            .map(|c| crack_geometry(spec, c, height))
-            .transpose()?;
-        let (x_breaks, y_breaks) = match crack_geometry {
-            Some((y, x0, x1)) => (vec![x0, x1], vec![y]),
-            None => (vec![], vec![]),
-        };
         let mut mesh = Mesh::layered(
             &laminate,
             spec.width_m,
             spec.element_size_x_m,
             spec.element_size_y_m,
-            &x_breaks,
-            &y_breaks,
+            &[],
+            &[],
         )?;
-        let crack = match crack_geometry {
-            Some((y, x0, x1)) => {
-                let snap = |v: Option<f64>| {
-                    v.ok_or_else(|| Error::Mesh("crack needs a structured mesh".into()))
-                };
-                Some(mesh.insert_crack(
-                    snap(mesh.nearest_row_y(y))?,
-                    snap(mesh.nearest_column_x(x0))?,
-                    snap(mesh.nearest_column_x(x1))?,
-                )?)
-            }
-            None => None,
+        let crack_placement = spec
+            .crack
+            .as_ref()
+            .map(|c| place_crack(spec, c, &mesh, height))
+            .transpose()?;
+        let crack = match &crack_placement {
+            Some(p) if !p.tied => Some(p.insert(&mut mesh)?),
+            _ => None,
         };
         let fixed = if spec.fix_bottom_corners {
             bottom_corner_dofs(&mesh)
@@ -383,7 +398,11 @@ impl Scene {
         };
         let transmitter = transmitter_weights(&mesh, &spec.transmitter, height, spec.width_m)?;
         let receivers = build_receivers(&mesh, &spec.receivers, height)?;
-        let contact = spec.crack.as_ref().and_then(|c| c.contact);
+        let contact = spec
+            .crack
+            .as_ref()
+            .filter(|c| !c.tied)
+            .and_then(|c| c.contact);
         let absorbing = absorbing_edges(spec, height)?;
         let model = Model::build(
             mesh,
@@ -392,7 +411,10 @@ impl Scene {
             fixed,
             crack,
         )?;
-        let stability = solve::stability::estimate(&model);
+        let stability = match crack_placement.as_ref().filter(|p| p.tied) {
+            Some(p) => split_stability(&model, p)?,
+            None => solve::stability::estimate(&model),
+        };
         Ok(Scene {
             spec: spec.clone(),
             laminate,
@@ -400,6 +422,7 @@ impl Scene {
             transmitter,
             receivers,
             contact,
+            crack_placement,
             stability,
         })
     }
@@ -447,6 +470,122 @@ impl Scene {
     pub fn default_dt_s(&self) -> f64 {
         0.9 * self.stability.dt_crit_s
     }
+}
+
+/// Where a crack lies on the mesh: the requested geometry and the mesh lines it snapped to
+/// (depths below the top surface, x from the left edge).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CrackPlacement {
+    /// Requested depth, `crack.depth_m` (m).
+    pub depth_requested_m: f64,
+    /// Depth of the row line used (m).
+    pub depth_used_m: f64,
+    /// Requested left tip, x_center_m - length_m / 2 (m).
+    pub x0_requested_m: f64,
+    /// Left tip used: a column line (m).
+    pub x0_used_m: f64,
+    /// Requested right tip, x_center_m + length_m / 2 (m).
+    pub x1_requested_m: f64,
+    /// Right tip used: a column line (m).
+    pub x1_used_m: f64,
+    /// Faces tied (the uncracked companion): no node is split.
+    pub tied: bool,
+    /// Height of the crack line above the bottom edge, exactly the mesh's row line (m).
+    #[serde(skip)]
+    y_m: f64,
+}
+
+impl CrackPlacement {
+    /// Splits the crack's nodes in `mesh` (the mesh it was placed on).
+    fn insert(&self, mesh: &mut Mesh) -> Result<crate::mesh::Crack> {
+        mesh.insert_crack(self.y_m, self.x0_used_m, self.x1_used_m)
+    }
+}
+
+/// Snaps the crack of `c` onto the mesh lines of `mesh` (built without it): the line to the
+/// nearest interior row line, each tip to the nearest interior column line, each within half
+/// the local row height / column width. Errors name the field and the value when no line is
+/// that close (the crack would lie on an edge) or when the tips leave no node between them.
+fn place_crack(
+    spec: &SceneSpec,
+    c: &CrackSpec,
+    mesh: &Mesh,
+    height: f64,
+) -> Result<CrackPlacement> {
+    let (y, x0, x1) = crack_geometry(spec, c, height)?;
+    let grid = mesh
+        .grid
+        .as_ref()
+        .ok_or_else(|| Error::Mesh("a crack needs a structured mesh".into()))?;
+    let row = grid.snap_row(y).ok_or_else(|| {
+        Error::invalid(
+            "crack.depth_m",
+            c.depth_m,
+            format!(
+                "no interior mesh row line within half an element row of it (the nearest line \
+                 is the {} surface; element_size_y_m = {:e} m)",
+                if y > 0.5 * height { "top" } else { "bottom" },
+                spec.element_size_y_m
+            ),
+        )
+    })?;
+    let column = |x: f64, tip: &str| {
+        grid.snap_column(x).ok_or_else(|| {
+            Error::invalid(
+                "crack.x_center_m, crack.length_m",
+                format!("{tip} tip x = {x:.6e} m"),
+                format!(
+                    "no interior mesh column line within half a column of it (the nearest \
+                     line is the {} edge; element_size_x_m = {:e} m)",
+                    if x < 0.5 * spec.width_m {
+                        "left"
+                    } else {
+                        "right"
+                    },
+                    spec.element_size_x_m
+                ),
+            )
+        })
+    };
+    let (i0, i1) = (column(x0, "left")?, column(x1, "right")?);
+    if i1 < i0 + 2 {
+        return Err(Error::invalid(
+            "crack.length_m",
+            c.length_m,
+            format!(
+                "its tips snap to column lines {:.6e} and {:.6e} m, leaving no node between \
+                 them; the crack needs at least two columns (element_size_x_m = {:e} m)",
+                grid.x_m[i0], grid.x_m[i1], spec.element_size_x_m
+            ),
+        ));
+    }
+    let y_m = grid.y_m[row];
+    Ok(CrackPlacement {
+        depth_requested_m: c.depth_m,
+        depth_used_m: height - y_m,
+        x0_requested_m: x0,
+        x0_used_m: grid.x_m[i0],
+        x1_requested_m: x1,
+        x1_used_m: grid.x_m[i1],
+        tied: c.tied,
+        y_m,
+    })
+}
+
+/// The stability estimate of the cracked (split) version of the tied `model`: the shared
+/// step of a cracked scene and its tied companion (see [`Scene::build`]).
+fn split_stability(model: &Model, placement: &CrackPlacement) -> Result<StabilityEstimate> {
+    let mut mesh = model.mesh.clone();
+    let crack = placement.insert(&mut mesh)?;
+    // Dashpots do not enter M^-1 K, so the split copy is built without them.
+    let split = Model::build(
+        mesh,
+        model.materials.clone(),
+        &[],
+        model.fixed_dofs.clone(),
+        Some(crack),
+    )?;
+    Ok(solve::stability::estimate(&split))
 }
 
 /// Crack line and tips (m) from its spec, checked against the domain.

@@ -10,9 +10,10 @@
 //!
 //! Everything the stencil does not describe is read from the assembled K, row by row, in
 //! the same order as [`BlockCsr::row_product`]: the bottom and top node rows, the first and
-//! last columns, the columns where the width changes (x breaks such as crack tips), the
-//! rows along a crack (their pattern differs: the elements below the crack use the
-//! duplicated nodes) and the crack's duplicated nodes themselves. The stencil is not
+//! last columns, the columns where the width changes (x breaks; scenes make none, since a
+//! crack snaps onto the lines of the mesh built without it), the two node rows along a
+//! crack (their pattern differs: the elements below the crack use the duplicated nodes)
+//! and the crack's duplicated nodes themselves. The stencil is not
 //! trusted blindly: when the operator is built every node it would handle is checked
 //! against its row of K (same 7 columns, every entry within 1e-12 of the row's largest
 //! entry; the only admissible difference is the coordinate round-off of nominally equal

@@ -30,6 +30,38 @@ pub struct Grid {
     pub y_m: Vec<f64>,
 }
 
+impl Grid {
+    /// Index of the interior row line (not the bottom or top edge) a crack at height `y_m`
+    /// snaps to, see [`snap_to_interior_line`].
+    pub fn snap_row(&self, y_m: f64) -> Option<usize> {
+        snap_to_interior_line(&self.y_m, y_m)
+    }
+
+    /// Index of the interior column line (not the left or right edge) a crack tip at `x_m`
+    /// snaps to, see [`snap_to_interior_line`].
+    pub fn snap_column(&self, x_m: f64) -> Option<usize> {
+        snap_to_interior_line(&self.x_m, x_m)
+    }
+}
+
+/// Snaps `v` onto increasing grid `lines`: the nearer end of the grid interval containing
+/// `v`, if that end is an interior line (neither the first nor the last) and lies within
+/// half the interval (the tolerance of snapping, so the mesh itself never changes). `None`
+/// when `v` is outside the lines or only a boundary line is that close.
+pub fn snap_to_interior_line(lines: &[f64], v: f64) -> Option<usize> {
+    let n = lines.len();
+    if n < 3 || !(v >= lines[0] && v <= lines[n - 1]) {
+        return None;
+    }
+    let hi = lines.partition_point(|&l| l <= v).clamp(1, n - 1);
+    let lo = hi - 1;
+    let half = 0.5 * (lines[hi] - lines[lo]);
+    [lo, hi]
+        .into_iter()
+        .filter(|&i| i > 0 && i < n - 1 && (lines[i] - v).abs() <= half)
+        .min_by(|&a, &b| (lines[a] - v).abs().total_cmp(&(lines[b] - v).abs()))
+}
+
 /// An unstructured T3 mesh with element materials (counter-clockwise triangles).
 #[derive(Clone, Debug, Serialize)]
 pub struct Mesh {
@@ -122,9 +154,10 @@ impl Mesh {
     ///
     /// Columns are at most `hx` wide; element rows are at most `hy` high, every layer
     /// interface is a row line and every layer gets at least one row. `x_breaks` and
-    /// `y_breaks` add lines the mesh must conform to (for example crack tips and the crack
-    /// line); a break closer than a quarter element to an existing line snaps to it. Each
-    /// rectangular cell is split along its rising diagonal into two counter-clockwise T3.
+    /// `y_breaks` add lines the mesh must conform to; a break closer than a quarter element
+    /// to an existing line snaps to it. (Scenes pass none: a crack snaps onto the lines of
+    /// this mesh, see [`Grid::snap_row`], so that a crack never changes the discretisation.)
+    /// Each rectangular cell is split along its rising diagonal into two counter-clockwise T3.
     pub fn layered(
         laminate: &Laminate,
         width_m: f64,
@@ -510,6 +543,23 @@ mod tests {
         let y = mesh.nearest_row_y(0.6e-3).unwrap();
         let e = mesh.insert_crack(y, 1.03e-3, 2e-3).unwrap_err().to_string();
         assert!(e.contains("not on mesh lines"), "{e}");
+    }
+
+    #[test]
+    fn snapping_takes_the_nearer_interior_line_within_half_an_interval() {
+        let lines = [0.0, 1.0, 2.0, 4.0, 5.0];
+        assert_eq!(snap_to_interior_line(&lines, 2.0), Some(2));
+        assert_eq!(snap_to_interior_line(&lines, 2.9), Some(2));
+        assert_eq!(snap_to_interior_line(&lines, 3.1), Some(3));
+        assert_eq!(snap_to_interior_line(&lines, 3.0), Some(2)); // a tie takes the lower line
+        assert_eq!(snap_to_interior_line(&lines, 0.6), Some(1));
+        // nearer to an edge than to an interior line, or outside: no line
+        assert_eq!(snap_to_interior_line(&lines, 0.4), None);
+        assert_eq!(snap_to_interior_line(&lines, 4.7), None);
+        assert_eq!(snap_to_interior_line(&lines, 5.0), None);
+        assert_eq!(snap_to_interior_line(&lines, -0.1), None);
+        assert_eq!(snap_to_interior_line(&lines, f64::NAN), None);
+        assert_eq!(snap_to_interior_line(&[0.0, 1.0], 0.5), None);
     }
 
     #[test]

@@ -70,7 +70,7 @@ mod scene_api {
         super::build(&ctx, overrides, base)
     }
 
-    /// The same scene rebuilt without its crack (same laminate draw and mesh sizes).
+    /// The uncracked companion: the same scene with the crack's faces tied, on the same mesh and with the same time step (the cracked scene's dt_crit).
     #[rhai_fn(global, pure, return_raw)]
     pub fn uncracked(ctx: NativeCallContext, scene: &mut SceneRef) -> Res<SceneRef> {
         Ok(Arc::new(
@@ -102,7 +102,7 @@ mod scene_api {
         scene.is_linear()
     }
 
-    /// Summary map: spec, DOFs, nodes, elements, layers, size, dt_crit and its element bound, clamped epoxy fraction, crack pairs.
+    /// Summary map: spec, DOFs, nodes, elements, layers, size, dt_crit and its element bound, clamped epoxy fraction, crack pairs, and crack: #{depth_requested_m, depth_used_m, x0_requested_m, x0_used_m, x1_requested_m, x1_used_m, tied} (where the crack snapped to the mesh lines; () without a crack).
     #[rhai_fn(global, pure, return_raw)]
     pub fn summary(ctx: NativeCallContext, scene: &mut SceneRef) -> Res<Dynamic> {
         let (x0, x1, y0, y1) = scene.model.mesh.bounds();
@@ -126,6 +126,7 @@ mod scene_api {
             "crack_pairs".into(),
             (scene.model.crack.as_ref().map_or(0, |c| c.pairs.len()) as INT).into(),
         );
+        m.insert("crack".into(), to_dynamic(&ctx, &scene.crack_placement)?);
         Ok(m.into())
     }
 
