@@ -84,12 +84,14 @@ fn special(value: f64, digits: usize) -> Option<String> {
     if value.is_nan() || value.is_infinite() {
         Some(value.to_string())
     } else if value == 0.0 {
-        Some(Rounded {
-            negative: false,
-            digits: "0".repeat(digits),
-            exponent: 0,
-        }
-        .decimal(1))
+        Some(
+            Rounded {
+                negative: false,
+                digits: "0".repeat(digits),
+                exponent: 0,
+            }
+            .decimal(1),
+        )
     } else {
         None
     }

@@ -187,7 +187,10 @@ fn two_bar_impact_exchanges_velocities_after_two_transit_times() {
     let series = out.contact_series.as_ref().unwrap();
     let touching = &series.in_contact;
     assert_eq!(touching.len(), out.report.steps);
-    assert_eq!((touching.dt_s, touching.t0_s), (out.report.dt_s, out.report.dt_s));
+    assert_eq!(
+        (touching.dt_s, touching.t0_s),
+        (out.report.dt_s, out.report.dt_s)
+    );
     assert_eq!(
         touching.samples.iter().filter(|&&n| n > 0.0).count(),
         contact.steps_in_contact
