@@ -75,7 +75,7 @@ struct CrackRow {
     overhead_percent: f64,
     crack_pairs: usize,
     steps_in_contact: usize,
-    max_pairs_slipping: u32,
+    max_pairs_slipping: usize,
 }
 
 #[derive(Serialize)]
@@ -550,7 +550,7 @@ fn main() {
             let nc = tc * 1e9 / cracked.dofs() as f64;
             let np = tp * 1e9 / plain.dofs() as f64;
             let overhead = 100.0 * (nc / np - 1.0);
-            let slipping = report.slipping.iter().copied().max().unwrap_or(0);
+            let slipping = report.max_pairs_slipping;
             println!(
                 "  {:>8} {:>14.3} {:>14.3} {:>9.1}% {:>13.3}x {:>16} {:>13}",
                 threads,

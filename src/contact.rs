@@ -17,6 +17,7 @@
 
 use crate::error::{Error, Result};
 use crate::mesh::Crack;
+use crate::signal::Signal;
 use serde::{Deserialize, Serialize};
 
 /// How the normal contact constraint is enforced.
@@ -55,11 +56,13 @@ impl Default for ContactOptions {
     }
 }
 
-/// Contact diagnostics of a run.
+/// Contact diagnostics of a run: scalars only (the per-step counts are in [`ContactSeries`]).
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct ContactReport {
     /// Method used.
     pub method: String,
+    /// Node pairs on the crack.
+    pub pairs: usize,
     /// Mean contact iterations per step (1 for the exact multiplier while in contact).
     pub iterations_mean: f64,
     /// Largest iterations in one step.
@@ -68,14 +71,49 @@ pub struct ContactReport {
     pub capped_steps: usize,
     /// Largest penetration left after the correction (m).
     pub max_penetration_m: f64,
-    /// Pairs in contact at each step.
-    pub in_contact: Vec<u32>,
-    /// Pairs sticking at each step.
-    pub sticking: Vec<u32>,
-    /// Pairs slipping at each step.
-    pub slipping: Vec<u32>,
     /// Steps with at least one pair in contact.
     pub steps_in_contact: usize,
+    /// Steps with at least one pair slipping.
+    pub steps_slipping: usize,
+    /// Most pairs in contact at one step.
+    pub max_pairs_in_contact: usize,
+    /// Most pairs slipping at one step.
+    pub max_pairs_slipping: usize,
+    /// Mean pairs in contact over the steps in contact (0 if the crack never closed).
+    pub mean_pairs_in_contact: f64,
+    /// Mean pairs slipping over the steps in contact (0 if the crack never closed); with
+    /// `mean_pairs_in_contact`, the fraction of contact that slips.
+    pub mean_pairs_slipping: f64,
+}
+
+/// Pair counts at every step of a run, sampled at the solver step: sample n counts the
+/// state after the correction of step n, i.e. of the displacement at t = (n + 1) dt.
+#[derive(Clone, Debug, Serialize)]
+pub struct ContactSeries {
+    /// Pairs in contact (carrying a normal force).
+    pub in_contact: Signal,
+    /// Pairs in contact and sticking.
+    pub sticking: Signal,
+    /// Pairs in contact and slipping.
+    pub slipping: Signal,
+}
+
+/// Pair counts per step, collected during a run.
+#[derive(Clone, Debug, Default)]
+struct Counts {
+    in_contact: Vec<u32>,
+    sticking: Vec<u32>,
+    slipping: Vec<u32>,
+}
+
+impl Counts {
+    fn with_capacity(steps: usize) -> Counts {
+        Counts {
+            in_contact: Vec::with_capacity(steps),
+            sticking: Vec::with_capacity(steps),
+            slipping: Vec::with_capacity(steps),
+        }
+    }
 }
 
 /// The DOFs and compliances of one pair.
@@ -103,6 +141,7 @@ pub struct ContactSolver {
     gap: Vec<f64>,
     pub(crate) force: Vec<PairForce>,
     report: ContactReport,
+    counts: Counts,
     iterations_total: usize,
 }
 
@@ -168,9 +207,7 @@ impl ContactSolver {
         let n = pairs.len();
         let report = ContactReport {
             method: format!("{:?}", options.method),
-            in_contact: Vec::with_capacity(steps),
-            sticking: Vec::with_capacity(steps),
-            slipping: Vec::with_capacity(steps),
+            pairs: n,
             ..Default::default()
         };
         Ok(ContactSolver {
@@ -180,6 +217,7 @@ impl ContactSolver {
             gap: vec![0.0; n],
             force: vec![PairForce::default(); n],
             report,
+            counts: Counts::with_capacity(steps),
             iterations_total: 0,
         })
     }
@@ -231,10 +269,9 @@ impl ContactSolver {
             self.stick_gap[k] = u_next[p.slave[0]] - u_next[p.master[0]];
             self.force[k].tangential = lambda_t;
         }
-        self.report.in_contact.push(contact);
-        self.report.sticking.push(stick);
-        self.report.slipping.push(slip);
-        self.report.steps_in_contact += (contact > 0) as usize;
+        self.counts.in_contact.push(contact);
+        self.counts.sticking.push(stick);
+        self.counts.slipping.push(slip);
         Ok(())
     }
 
@@ -340,9 +377,31 @@ impl ContactSolver {
         }
     }
 
-    /// Final diagnostics.
-    pub fn finish(mut self, steps: usize) -> ContactReport {
-        self.report.iterations_mean = self.iterations_total as f64 / steps.max(1) as f64;
-        self.report
+    /// Final diagnostics of a run of `steps` steps of `dt_s`: the scalar report and the
+    /// per-step pair counts as signals.
+    pub fn finish(mut self, steps: usize, dt_s: f64) -> (ContactReport, ContactSeries) {
+        let c = &self.counts;
+        let r = &mut self.report;
+        r.iterations_mean = self.iterations_total as f64 / steps.max(1) as f64;
+        r.steps_in_contact = c.in_contact.iter().filter(|&&n| n > 0).count();
+        r.steps_slipping = c.slipping.iter().filter(|&&n| n > 0).count();
+        r.max_pairs_in_contact = c.in_contact.iter().max().map_or(0, |&n| n as usize);
+        r.max_pairs_slipping = c.slipping.iter().max().map_or(0, |&n| n as usize);
+        let steps_in_contact = r.steps_in_contact.max(1) as f64;
+        let per_step_in_contact =
+            |v: &[u32]| v.iter().map(|&n| f64::from(n)).sum::<f64>() / steps_in_contact;
+        r.mean_pairs_in_contact = per_step_in_contact(&c.in_contact);
+        r.mean_pairs_slipping = per_step_in_contact(&c.slipping);
+        let signal = |v: &[u32]| Signal {
+            dt_s,
+            t0_s: dt_s,
+            samples: v.iter().map(|&n| f64::from(n)).collect(),
+        };
+        let series = ContactSeries {
+            in_contact: signal(&c.in_contact),
+            sticking: signal(&c.sticking),
+            slipping: signal(&c.slipping),
+        };
+        (self.report, series)
     }
 }

@@ -10,6 +10,7 @@ pub mod contact;
 pub mod error;
 pub mod fem;
 pub mod figures;
+pub mod format;
 pub mod io;
 pub mod laminate;
 pub mod material;

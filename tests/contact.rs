@@ -183,6 +183,20 @@ fn impact(method: ContactMethod) -> (RunOutput, f64, f64) {
 fn two_bar_impact_exchanges_velocities_after_two_transit_times() {
     let (out, expected_duration, v0) = impact(ContactMethod::Exact);
     let contact = out.report.contact.as_ref().unwrap();
+    // the report's scalars summarise the per-step series on the run output
+    let series = out.contact_series.as_ref().unwrap();
+    let touching = &series.in_contact;
+    assert_eq!(touching.len(), out.report.steps);
+    assert_eq!(
+        (touching.dt_s, touching.t0_s),
+        (out.report.dt_s, out.report.dt_s)
+    );
+    assert_eq!(
+        touching.samples.iter().filter(|&&n| n > 0.0).count(),
+        contact.steps_in_contact
+    );
+    assert_eq!(touching.max_abs(), contact.max_pairs_in_contact as f64);
+    assert_eq!(contact.max_pairs_in_contact, contact.pairs);
     let duration = contact.steps_in_contact as f64 * out.report.dt_s;
     // 2%: the contact time of the discrete bars differs from 2L/c by a few steps.
     assert!(
@@ -354,8 +368,9 @@ fn pushed_block_slides_at_coulomb_deceleration_or_sticks() {
         (measured / expected - 1.0).abs() < 0.02,
         "acceleration {measured:e} vs (T - mu N)/m = {expected:e}"
     );
-    let c = out.report.contact.as_ref().unwrap();
-    assert!(c.slipping.iter().skip(100).any(|&s| s > 0));
+    let series = out.contact_series.as_ref().unwrap();
+    assert!(series.slipping.samples.iter().skip(100).any(|&s| s > 0.0));
+    assert!(out.report.contact.as_ref().unwrap().max_pairs_slipping > 0);
     // Below the friction limit the block sticks: after the ramp its mean velocity only
     // oscillates elastically, and its average is a small fraction of the speed free
     // sliding would reach, T/m (t_end - RAMP/2).
@@ -383,12 +398,18 @@ fn friction_extremes_work() {
     assert!(mean_after_ramp(&out.traces[0]).abs() < 0.02 * free);
     // Full stick: no drift (above), and slip events are isolated single-step micro-slips of
     // a corner pair where the pressure momentarily vanishes: under 0.1% of pair-steps.
-    let c = out.report.contact.as_ref().unwrap();
-    let slips: u32 = c.slipping.iter().sum();
-    let pair_steps: u32 = c.in_contact.iter().sum();
+    let series = out.contact_series.as_ref().unwrap();
+    let slips: f64 = series.slipping.samples.iter().sum();
+    let pair_steps: f64 = series.in_contact.samples.iter().sum();
     assert!(
-        f64::from(slips) < 1e-3 * f64::from(pair_steps),
+        slips < 1e-3 * pair_steps,
         "{slips} slips in {pair_steps} pair-steps"
+    );
+    // the report's means say the same: slipping over in-contact pairs per contact step
+    let c = out.report.contact.as_ref().unwrap();
+    assert!(
+        (c.mean_pairs_slipping / c.mean_pairs_in_contact - slips / pair_steps).abs() < 1e-12,
+        "{c:?}"
     );
 }
 

@@ -7,10 +7,12 @@
 //! [`MODULES`]. Host state a binding needs (output directory, `--set` parameters, progress
 //! display) is reached through [`HostContext::of`].
 //!
-//! Rhai names exposed here: `signal`, `plot`, `io`, `material`, `laminate`, `test`, `host`.
+//! Rhai names exposed here: `signal`, `plot`, `io`, `material`, `laminate`, `scene`, `trnews`,
+//! `study`, `figure`, `fmt`, `test`, `host`.
 
 mod convert;
 mod figure;
+mod format;
 mod host;
 mod io;
 mod laminate;
@@ -47,6 +49,7 @@ const MODULES: &[(&str, ModuleBuilder)] = &[
     ("trnews", trnews::module),
     ("study", study::module),
     ("figure", figure::module),
+    ("fmt", format::module),
     ("test", test::module),
     ("host", host::module),
 ];

@@ -165,10 +165,27 @@ mod scene_api {
         Ok(run.traces[index(&ctx, k, run.traces.len(), "receiver")?].clone())
     }
 
-    /// The run report: wall time, steps, DOFs, dt, dt_crit, dt/dt_crit, energy residuals, source work, contact diagnostics.
+    /// The run report (scalars): wall time, steps, DOFs, dt, dt_crit, dt/dt_crit, energy residuals, source work, contact diagnostics (iterations, penetration, steps in contact or slipping, max and mean pairs in contact and slipping) or ().
     #[rhai_fn(global, get = "report", pure, return_raw)]
     pub fn report(ctx: NativeCallContext, run: &mut RunRef) -> Res<Dynamic> {
         to_dynamic(&ctx, &run.report)
+    }
+
+    /// Pairs in contact, sticking and slipping at every step as #{in_contact, sticking, slipping} of Signal (sample n: after step n, t = (n + 1) dt), or () when the run had no contact.
+    #[rhai_fn(global, get = "contact_series", pure)]
+    pub fn contact_series(run: &mut RunRef) -> Dynamic {
+        let Some(c) = &run.contact_series else {
+            return Dynamic::UNIT;
+        };
+        let mut m = Map::new();
+        for (name, s) in [
+            ("in_contact", &c.in_contact),
+            ("sticking", &c.sticking),
+            ("slipping", &c.slipping),
+        ] {
+            m.insert(name.into(), Dynamic::from(s.clone()));
+        }
+        m.into()
     }
 
     /// The energy ledger: #{time_s, kinetic_j, strain_j, source_work_j, dashpot_loss_j, contact_loss_j, friction_loss_j, residual, initial_j}.

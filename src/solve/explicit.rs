@@ -303,6 +303,7 @@ pub(super) fn run(
             master_uy: crack_master.into_iter().map(to_signal).collect(),
             slave_uy: crack_slave.into_iter().map(to_signal).collect(),
         });
+    let (contact, contact_series) = contact.map(|c| c.finish(steps, dt)).unzip();
     let report = RunReport {
         integrator: "explicit central difference (lumped mass)".into(),
         wall_time_s,
@@ -315,13 +316,14 @@ pub(super) fn run(
         energy_residual: ledger.final_residual(),
         energy_residual_peak: ledger.peak_residual(),
         source_work_j: flows.source_work,
-        contact: contact.map(|c| c.finish(steps)),
+        contact,
     };
     Ok(RunOutput {
         report,
         traces: traces.into_iter().map(to_signal).collect(),
         receiver_names: receivers.iter().map(|r| r.name.clone()).collect(),
         crack,
+        contact_series,
         snapshots,
         ledger,
     })

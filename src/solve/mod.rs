@@ -7,7 +7,7 @@ mod ledger;
 mod newmark;
 pub mod stability;
 
-use crate::contact::{ContactOptions, ContactReport};
+use crate::contact::{ContactOptions, ContactReport, ContactSeries};
 use crate::error::{require_positive, Error, Result};
 use crate::fem::Model;
 use crate::mesh::Mesh;
@@ -117,7 +117,8 @@ impl Default for RunConfig {
     }
 }
 
-/// What every run reports: cost and error indicators.
+/// What every run reports: cost and error indicators, scalars only (per-step series are
+/// in [`RunOutput`]).
 #[derive(Clone, Debug, Serialize)]
 pub struct RunReport {
     /// Integrator used.
@@ -179,6 +180,8 @@ pub struct RunOutput {
     pub receiver_names: Vec<String>,
     /// Crack-face traces when asked and there is a crack.
     pub crack: Option<CrackTraces>,
+    /// Pairs in contact, sticking and slipping at every step, when contact was active.
+    pub contact_series: Option<ContactSeries>,
     /// Snapshots when asked.
     pub snapshots: Vec<Snapshot>,
     /// Energy ledger time series.

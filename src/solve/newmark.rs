@@ -328,6 +328,7 @@ pub(super) fn run(
             .collect(),
         receiver_names: receivers.iter().map(|r| r.name.clone()).collect(),
         crack: None,
+        contact_series: None,
         snapshots,
         ledger,
     })
