@@ -9,8 +9,9 @@
 //!
 //! The estimate is trusted only when q is close to the scheme's order p (|q - p| <= 0.5:
 //! then, if the error follows a power law, the estimate is within a factor 0.75..1.4 of the
-//! truth); otherwise the runs are not in the asymptotic range, the verdict says "refine"
-//! and no error is claimed. Waves that travel many wavelengths converge late (their phase
+//! truth). When the differences shrink faster (q > p + 0.5) the same number is an upper
+//! bound of the error. Otherwise the runs are not in the asymptotic range, the verdict says
+//! "refine" and no error is claimed. Waves that travel many wavelengths converge late (their phase
 //! error grows with distance), which is exactly when the check matters.
 //!
 //! For waveforms the differences are relative L2 norms over a window,
@@ -40,6 +41,9 @@ const ROUND_OFF: f64 = 1e-10;
 pub enum Verdict {
     /// The observed order is close to the scheme's: the estimate is reliable.
     Reliable,
+    /// Differences shrink faster than the scheme's order predicts (observed order above
+    /// it): the error is at most the stated bound d_1 / (2^p - 1).
+    UpperBound,
     /// The runs are not in the asymptotic range: no error is claimed, refine.
     Refine,
     /// The quantity does not change between discretisations (to round-off).
@@ -51,6 +55,7 @@ impl Verdict {
     pub fn describe(self) -> &'static str {
         match self {
             Verdict::Reliable => "estimate reliable",
+            Verdict::UpperBound => "converging faster than order p: error bound",
             Verdict::Refine => "not in the asymptotic range: refine",
             Verdict::MeshIndependent => "unchanged between meshes",
         }
@@ -67,7 +72,8 @@ pub struct Estimate {
     /// Values on the companions with 2x and 4x the element sizes (waveforms: the relative
     /// differences d_1 = |y_h - y_2h| and d_2 = |y_2h - y_4h| over |y_h|).
     pub companions: [f64; 2],
-    /// Estimated |error| of `value` (waveforms: relative L2 error); `None` unless reliable.
+    /// Estimated |error| of `value` (waveforms: relative L2 error), or its upper bound;
+    /// `None` when the runs are not in the asymptotic range.
     pub error: Option<f64>,
     /// Observed order of convergence, when the differences allow one.
     pub observed_order: Option<f64>,
@@ -159,6 +165,9 @@ impl Estimate {
                 (Verdict::Reliable, Some(e)) => {
                     format!("relative L2 error {e:.2e} (observed order {order})")
                 }
+                (Verdict::UpperBound, Some(e)) => {
+                    format!("relative L2 error below {e:.2e} (observed order {order})")
+                }
                 (Verdict::MeshIndependent, _) => "unchanged between meshes".into(),
                 _ => format!(
                     "relative L2 error unknown (h vs 2h differ by {:.2e}, observed order {order}): refine",
@@ -169,6 +178,9 @@ impl Estimate {
         match (self.verdict, self.error) {
             (Verdict::Reliable, Some(e)) => {
                 format!("{:.4e} +- {e:.2e} (observed order {order})", self.value)
+            }
+            (Verdict::UpperBound, Some(e)) => {
+                format!("{:.4e}, error below {e:.2e} (observed order {order})", self.value)
             }
             (Verdict::MeshIndependent, _) => format!("{:.4e} (unchanged between meshes)", self.value),
             _ => format!(
@@ -187,10 +199,12 @@ fn classify(d1: f64, d2: f64, scale: f64, order: f64) -> (Option<f64>, Option<f6
         return (Some(d1), None, Verdict::MeshIndependent);
     }
     let observed = (d1 > 0.0 && d2 > 0.0).then(|| (d2 / d1).log2());
+    let richardson = d1 / (2f64.powf(order) - 1.0);
     match observed {
         Some(q) if (q - order).abs() <= ORDER_TOLERANCE => {
-            (Some(d1 / (2f64.powf(order) - 1.0)), Some(q), Verdict::Reliable)
+            (Some(richardson), Some(q), Verdict::Reliable)
         }
+        Some(q) if q > order => (Some(richardson), Some(q), Verdict::UpperBound),
         _ => (None, observed, Verdict::Refine),
     }
 }
@@ -217,6 +231,14 @@ mod tests {
         assert!(e.error.is_none());
         assert!((e.observed_order.unwrap() - 1.0).abs() < 1e-9);
         assert!(e.describe().contains("refine"));
+    }
+
+    #[test]
+    fn faster_convergence_gives_a_bound() {
+        let q = |h: f64| 1.0 + 0.3 * h.powi(4);
+        let e = Estimate::scalar(q(0.1), q(0.2), q(0.4), T3_ORDER);
+        assert_eq!(e.verdict, Verdict::UpperBound);
+        assert!(e.error.unwrap() > 0.3 * 0.1f64.powi(4));
     }
 
     #[test]

@@ -412,7 +412,7 @@ impl Scene {
             crack,
         )?;
         let stability = match crack_placement.as_ref().filter(|p| p.tied) {
-            Some(p) => split_stability(&model, p)?,
+            Some(p) => split_stability(&model, p, &absorbing)?,
             None => solve::stability::estimate(&model),
         };
         Ok(Scene {
@@ -574,14 +574,18 @@ fn place_crack(
 
 /// The stability estimate of the cracked (split) version of the tied `model`: the shared
 /// step of a cracked scene and its tied companion (see [`Scene::build`]).
-fn split_stability(model: &Model, placement: &CrackPlacement) -> Result<StabilityEstimate> {
+fn split_stability(
+    model: &Model,
+    placement: &CrackPlacement,
+    absorbing: &[AbsorbingEdge],
+) -> Result<StabilityEstimate> {
     let mut mesh = model.mesh.clone();
     let crack = placement.insert(&mut mesh)?;
-    // Dashpots do not enter M^-1 K, so the split copy is built without them.
+    // The same edges: their springs enter K (their dashpots do not enter M^-1 K).
     let split = Model::build(
         mesh,
         model.materials.clone(),
-        &[],
+        absorbing,
         model.fixed_dofs.clone(),
         Some(crack),
     )?;

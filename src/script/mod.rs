@@ -7,9 +7,10 @@
 //! [`MODULES`]. Host state a binding needs (output directory, `--set` parameters, progress
 //! display) is reached through [`HostContext::of`].
 //!
-//! Rhai names exposed here: `signal`, `plot`, `io`, `material`, `laminate`, `scene`, `trnews`,
+//! Rhai names exposed here: `accuracy`, `signal`, `plot`, `io`, `material`, `laminate`, `scene`, `trnews`,
 //! `study`, `figure`, `fmt`, `test`, `host`.
 
+mod accuracy;
 mod convert;
 mod figure;
 mod format;
@@ -40,6 +41,7 @@ type ModuleBuilder = fn() -> Module;
 /// Every Rhai module of the host: its name in scripts and its builder.
 /// Adding a binding (e.g. `scene`) is one entry here plus its file.
 const MODULES: &[(&str, ModuleBuilder)] = &[
+    ("accuracy", accuracy::module),
     ("signal", signal::module),
     ("plot", plot::module),
     ("io", io::module),
@@ -418,6 +420,7 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
         });
         debugger.print(&format!("{at}{text}"))
     });
+    accuracy::register_types(&mut engine);
     signal::register_types(&mut engine);
     scene::register_types(&mut engine);
     trnews::register_types(&mut engine);

@@ -17,8 +17,7 @@ pub fn register_types(engine: &mut Engine) {
         .register_type_with_name::<Responder>("Responder")
         .register_type_with_name::<TrNewsRef>("TrNews")
         .register_type_with_name::<Focus>("Focus")
-        .register_type_with_name::<Delayed>("Delayed")
-        .register_type_with_name::<Estimate>("Estimate");
+        .register_type_with_name::<Delayed>("Delayed");
 }
 
 /// Options of `trnews::responder(scene, duration_s, options)`.
@@ -93,7 +92,6 @@ fn response_map(ctx: &NativeCallContext, out: crate::trnews::Response) -> Script
 #[export_module]
 mod trnews_api {
     use super::{estimate_map, points, ResponderOptions, TrNewsRef};
-    use crate::accuracy::Estimate;
     use crate::script::convert::{options, to_dynamic, WithPosition};
     use crate::script::scene::{index, SceneRef};
     use crate::signal::Signal;
@@ -447,44 +445,4 @@ mod trnews_api {
         })
     }
 
-    /// Value on the main discretisation (0 for a waveform, whose error is relative).
-    #[rhai_fn(global, get = "value", pure)]
-    pub fn estimate_value(e: &mut Estimate) -> FLOAT {
-        e.value
-    }
-
-    /// Estimated |error| of the value (waveforms: relative L2), or () unless the verdict is reliable.
-    #[rhai_fn(global, get = "error", pure)]
-    pub fn estimate_error(e: &mut Estimate) -> Dynamic {
-        e.error.map_or(Dynamic::UNIT, Dynamic::from)
-    }
-
-    /// Observed order of convergence from the three discretisations, or ().
-    #[rhai_fn(global, get = "observed_order", pure)]
-    pub fn estimate_order(e: &mut Estimate) -> Dynamic {
-        e.observed_order.map_or(Dynamic::UNIT, Dynamic::from)
-    }
-
-    /// Values on the companions [2h, 4h] (waveforms: relative differences [h vs 2h, 2h vs 4h]).
-    #[rhai_fn(global, get = "companions", pure)]
-    pub fn estimate_companions(e: &mut Estimate) -> Array {
-        e.companions.iter().map(|&v| Dynamic::from(v)).collect()
-    }
-
-    /// "reliable", "refine" or "mesh_independent".
-    #[rhai_fn(global, get = "verdict", pure)]
-    pub fn estimate_verdict(e: &mut Estimate) -> String {
-        match e.verdict {
-            crate::accuracy::Verdict::Reliable => "reliable",
-            crate::accuracy::Verdict::Refine => "refine",
-            crate::accuracy::Verdict::MeshIndependent => "mesh_independent",
-        }
-        .into()
-    }
-
-    /// The estimate in words: value +- error with the observed order, or why no error is claimed.
-    #[rhai_fn(global, name = "to_string", pure)]
-    pub fn estimate_to_string(e: &mut Estimate) -> String {
-        e.describe()
-    }
 }

@@ -1,0 +1,92 @@
+//! Rhai module `accuracy`: discretisation error estimates (type `Estimate`), the ones the
+//! TR-NEWS procedures attach with `error_estimate: true` and Richardson estimates of a
+//! script's own quantities from runs at h, 2h and 4h (see [`crate::accuracy`]).
+
+use crate::accuracy::Estimate;
+use rhai::plugin::*;
+use rhai::{Engine, Module};
+
+/// Registers the display name of `Estimate`.
+pub fn register_types(engine: &mut Engine) {
+    engine.register_type_with_name::<Estimate>("Estimate");
+}
+
+/// The `accuracy` module.
+pub fn module() -> Module {
+    exported_module!(accuracy_api)
+}
+
+#[export_module]
+mod accuracy_api {
+    use crate::accuracy::{Estimate, Verdict, T3_ORDER};
+    use crate::script::convert::WithPosition;
+    use crate::signal::Signal;
+    use rhai::{Array, Dynamic, NativeCallContext, FLOAT};
+
+    type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
+
+    /// Richardson estimate of a dimensional scalar from its values at element sizes h, 2h, 4h (T3 order 2).
+    pub fn scalar(fine: FLOAT, medium: FLOAT, coarse: FLOAT) -> Estimate {
+        Estimate::scalar(fine, medium, coarse, T3_ORDER)
+    }
+
+    /// Richardson estimate of a dimensionless measure of order one (misfit, residual, asymmetry) at h, 2h, 4h; changes below 1e-10 are round-off.
+    pub fn dimensionless(fine: FLOAT, medium: FLOAT, coarse: FLOAT) -> Estimate {
+        Estimate::dimensionless(fine, medium, coarse, T3_ORDER)
+    }
+
+    /// Richardson estimate of the relative L2 error of the trace `fine` over t_start_s..t_end_s from the same trace at 2h (`medium`) and 4h (`coarse`), resampled to the fine step.
+    #[rhai_fn(return_raw)]
+    pub fn waveform(
+        ctx: NativeCallContext,
+        fine: Signal,
+        medium: Signal,
+        coarse: Signal,
+        t_start_s: FLOAT,
+        t_end_s: FLOAT,
+    ) -> Res<Estimate> {
+        Estimate::waveform(&fine, &medium, &coarse, (t_start_s, t_end_s), T3_ORDER).at(&ctx)
+    }
+
+    /// Value on the main discretisation (0 for a waveform, whose error is relative).
+    #[rhai_fn(global, get = "value", pure)]
+    pub fn value(e: &mut Estimate) -> FLOAT {
+        e.value
+    }
+
+    /// Estimated |error| of the value (waveforms: relative L2) or its bound, or () when the verdict is "refine".
+    #[rhai_fn(global, get = "error", pure)]
+    pub fn error(e: &mut Estimate) -> Dynamic {
+        e.error.map_or(Dynamic::UNIT, Dynamic::from)
+    }
+
+    /// Observed order of convergence from the three discretisations, or ().
+    #[rhai_fn(global, get = "observed_order", pure)]
+    pub fn observed_order(e: &mut Estimate) -> Dynamic {
+        e.observed_order.map_or(Dynamic::UNIT, Dynamic::from)
+    }
+
+    /// Values on the companions [2h, 4h] (waveforms: relative differences [h vs 2h, 2h vs 4h]).
+    #[rhai_fn(global, get = "companions", pure)]
+    pub fn companions(e: &mut Estimate) -> Array {
+        e.companions.iter().map(|&v| Dynamic::from(v)).collect()
+    }
+
+    /// "reliable", "upper_bound" (converging faster than order 2: `error` bounds it), "refine" (not in the asymptotic range: no error claimed) or "mesh_independent".
+    #[rhai_fn(global, get = "verdict", pure)]
+    pub fn verdict(e: &mut Estimate) -> String {
+        match e.verdict {
+            Verdict::Reliable => "reliable",
+            Verdict::UpperBound => "upper_bound",
+            Verdict::Refine => "refine",
+            Verdict::MeshIndependent => "mesh_independent",
+        }
+        .into()
+    }
+
+    /// The estimate in words: value +- error with the observed order, or why no error is claimed.
+    #[rhai_fn(global, name = "to_string", pure)]
+    pub fn to_string(e: &mut Estimate) -> String {
+        e.describe()
+    }
+}
