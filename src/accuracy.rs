@@ -180,9 +180,14 @@ impl Estimate {
                 format!("{:.4e} +- {e:.2e} (observed order {order})", self.value)
             }
             (Verdict::UpperBound, Some(e)) => {
-                format!("{:.4e}, error below {e:.2e} (observed order {order})", self.value)
+                format!(
+                    "{:.4e}, error below {e:.2e} (observed order {order})",
+                    self.value
+                )
             }
-            (Verdict::MeshIndependent, _) => format!("{:.4e} (unchanged between meshes)", self.value),
+            (Verdict::MeshIndependent, _) => {
+                format!("{:.4e} (unchanged between meshes)", self.value)
+            }
             _ => format!(
                 "{:.4e} (error unknown, observed order {order}, change from 2h {:.2e}: refine)",
                 self.value,
@@ -271,6 +276,9 @@ mod tests {
         let exact = pulse(0.0);
         let truth = signal::relative_l2(&f, &exact, None).unwrap();
         assert_eq!(e.verdict, Verdict::Reliable, "{e:?}");
-        assert!((e.error.unwrap() / truth - 1.0).abs() < 0.1, "{e:?} vs {truth}");
+        assert!(
+            (e.error.unwrap() / truth - 1.0).abs() < 0.1,
+            "{e:?} vs {truth}"
+        );
     }
 }

@@ -56,8 +56,12 @@ pub fn pulse_inversion(path: &Path, envelope_path: Option<&Path>, tr: &TrNews) -
     let mut envelopes = Vec::new();
     for f in &tr.focus {
         let Some(sum) = &f.pi_sum else { continue };
+        let residual = match f.estimates.as_ref().and_then(|e| e.pi_residual) {
+            Some(e) => e.describe(),
+            None => format!("{:.3}", sum.max_abs() / f.focused.max_abs()),
+        };
         panels.push(Panel {
-            title: format!("Receiver {}", f.receiver),
+            title: format!("Receiver {}: PI residual {residual}", f.receiver),
             series: vec![
                 series_us("positive excitation", &f.focused),
                 series_us("PI sum (+ and -)", sum),
@@ -70,7 +74,7 @@ pub fn pulse_inversion(path: &Path, envelope_path: Option<&Path>, tr: &TrNews) -
     }
     stacked_plot(
         path,
-        "TR-NEWS focusing with pulse inversion",
+        &format!("TR-NEWS focusing with pulse inversion ({})", tr.band),
         "time (us)",
         "u_y (m)",
         &panels,
@@ -79,7 +83,7 @@ pub fn pulse_inversion(path: &Path, envelope_path: Option<&Path>, tr: &TrNews) -
         line_plot(
             p,
             &axes(
-                "Envelopes of the PI nonlinearity",
+                &format!("Envelopes of the PI nonlinearity ({})", tr.band),
                 "time (us)",
                 "envelope of PI sum (m)",
             ),

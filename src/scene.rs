@@ -404,13 +404,7 @@ impl Scene {
             .filter(|c| !c.tied)
             .and_then(|c| c.contact);
         let absorbing = absorbing_edges(spec, height)?;
-        let model = Model::build(
-            mesh,
-            laminate.materials.clone(),
-            &absorbing,
-            fixed,
-            crack,
-        )?;
+        let model = Model::build(mesh, laminate.materials.clone(), &absorbing, fixed, crack)?;
         let stability = match crack_placement.as_ref().filter(|p| p.tied) {
             Some(p) => split_stability(&model, p, &absorbing)?,
             None => solve::stability::estimate(&model),

@@ -105,11 +105,7 @@ impl TransducerSpec {
 
     /// "0.2-2 MHz" style label of the band, for titles and printed results.
     pub fn label(&self) -> String {
-        format!(
-            "{}-{} MHz band",
-            self.f_lo_hz / 1e6,
-            self.f_hi_hz / 1e6
-        )
+        format!("{}-{} MHz band", self.f_lo_hz / 1e6, self.f_hi_hz / 1e6)
     }
 }
 
@@ -130,7 +126,11 @@ pub fn energy_outside_band(s: &Signal, f_lo_hz: f64, f_hi_hz: f64) -> Result<f64
         }
     }
     if !(total > 0.0) {
-        return Err(Error::invalid("signal", "all zero", "has no energy to split by band"));
+        return Err(Error::invalid(
+            "signal",
+            "all zero",
+            "has no energy to split by band",
+        ));
     }
     Ok(1.0 - inside / total)
 }
@@ -156,7 +156,11 @@ mod tests {
         let centre = (t.f_lo_hz * t.f_hi_hz).sqrt();
         let steady = |s: &Signal| s.window(60e-6, 100e-6).unwrap().max_abs();
         let out = t.receive(&tone(centre, dt, 50_000)).unwrap();
-        assert!((steady(&out) - 1.0).abs() < 0.02, "centre gain {}", steady(&out));
+        assert!(
+            (steady(&out) - 1.0).abs() < 0.02,
+            "centre gain {}",
+            steady(&out)
+        );
         let low = t.receive(&tone(0.1 * t.f_lo_hz, dt, 50_000)).unwrap();
         assert!(steady(&low) < 0.012, "gain a decade below {}", steady(&low));
     }
@@ -177,12 +181,19 @@ mod tests {
             ..Default::default()
         };
         let e = bad.validate(1e-8).unwrap_err().to_string();
-        assert!(e.contains("transducer.f_hi_hz") && e.contains("1000000000000"), "{e}");
+        assert!(
+            e.contains("transducer.f_hi_hz") && e.contains("1000000000000"),
+            "{e}"
+        );
         let inverted = TransducerSpec {
             f_lo_hz: 3e6,
             ..Default::default()
         };
-        assert!(inverted.validate(1e-8).unwrap_err().to_string().contains("f_lo_hz"));
+        assert!(inverted
+            .validate(1e-8)
+            .unwrap_err()
+            .to_string()
+            .contains("f_lo_hz"));
     }
 
     #[test]

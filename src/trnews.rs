@@ -95,6 +95,13 @@ impl Responder {
         Ok(self)
     }
 
+    /// Run time of the companions relative to this responder's, from DOFs x steps:
+    /// sum over companions of (DOFs_c / DOFs) (dt / dt_c). 0 without companions.
+    pub fn companion_cost(&self) -> f64 {
+        let work = |r: &Responder| r.scene.model.dofs() as f64 / r.dt_s;
+        self.companions.iter().map(work).sum::<f64>() / work(self)
+    }
+
     /// The companions of the error estimate (2h, 4h), empty without one.
     pub fn companions(&self) -> &[Responder] {
         &self.companions
@@ -371,7 +378,12 @@ pub fn tr_news(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
 }
 
 /// The estimates of focus `i` from the runs at h, 2h, 4h.
-fn focus_estimates(fine: &TrNews, medium: &TrNews, coarse: &TrNews, i: usize) -> Result<FocusEstimates> {
+fn focus_estimates(
+    fine: &TrNews,
+    medium: &TrNews,
+    coarse: &TrNews,
+    i: usize,
+) -> Result<FocusEstimates> {
     let f = [&fine.focus[i], &medium.focus[i], &coarse.focus[i]];
     let scalar = |q: &dyn Fn(&Focus) -> f64| Estimate::scalar(q(f[0]), q(f[1]), q(f[2]), T3_ORDER);
     let spec = &fine.spec;

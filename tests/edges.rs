@@ -48,10 +48,20 @@ fn plane_wave_reflection(m: &Material, f_hz: f64, angle_deg: f64, load: Load) ->
     let (sp, cp) = (s * vs, (1.0 - (s * vs).powi(2)).sqrt());
     let (eta_p, eta_s) = (ct / vp, cp / vs);
     let i = Complex::new(0.0, 1.0);
-    let spring = if load == Load::ViscousSpring { mu / R } else { 0.0 };
+    let spring = if load == Load::ViscousSpring {
+        mu / R
+    } else {
+        0.0
+    };
     let dashpot = if load == Load::Free { 0.0 } else { rho };
-    let (k_n, k_t) = (VISCOUS_SPRING_ALPHA_N * spring, VISCOUS_SPRING_ALPHA_T * spring);
-    let (z_n, z_t) = (i * omega * dashpot * vp + k_n, i * omega * dashpot * vs + k_t);
+    let (k_n, k_t) = (
+        VISCOUS_SPRING_ALPHA_N * spring,
+        VISCOUS_SPRING_ALPHA_T * spring,
+    );
+    let (z_n, z_t) = (
+        i * omega * dashpot * vp + k_n,
+        i * omega * dashpot * vs + k_t,
+    );
     // Each wave: polarisation (dx, dy) and vertical slowness eta_y (d/dy = i w eta_y).
     let waves = [
         ([st, -ct], eta_p),  // incident P, travelling toward -y
@@ -132,7 +142,9 @@ fn viscous_spring_edge_reflects_as_plane_wave_theory_from_50_khz_to_1_mhz() {
     let e = epoxy();
     let z = e.impedance_p_y();
     let k = VISCOUS_SPRING_ALPHA_N * e.density_kg_m3 * e.wave_speeds().s_m_s.powi(2) / R;
-    println!("f (MHz)  |R| measured  |R| theory (viscous-spring, normal incidence, epoxy, R = 10 mm)");
+    println!(
+        "f (MHz)  |R| measured  |R| theory (viscous-spring, normal incidence, epoxy, R = 10 mm)"
+    );
     for f in [0.05e6, 0.1e6, 0.2e6, 0.5e6, 1e6] {
         let measured = dtft(&reflected, f).norm() / dtft(&dashpot, f).norm();
         let omega = 2.0 * std::f64::consts::PI * f;
@@ -140,7 +152,10 @@ fn viscous_spring_edge_reflects_as_plane_wave_theory_from_50_khz_to_1_mhz() {
         let (plane, _) = plane_wave_reflection(&e, f, 0.0, Load::ViscousSpring);
         println!("{:7.2}  {measured:12.5}  {theory:10.5}", f / 1e6);
         assert!((plane - theory).abs() < 1e-12, "plane-wave solver at 0 deg");
-        assert!((measured / theory - 1.0).abs() < 0.02, "{f} Hz: {measured} vs {theory}");
+        assert!(
+            (measured / theory - 1.0).abs() < 0.02,
+            "{f} Hz: {measured} vs {theory}"
+        );
     }
 }
 
@@ -161,7 +176,11 @@ fn plane_wave_reflection_of_a_free_edge_matches_the_textbook_and_absorbers_are_t
     };
     for deg in [0.0, 20.0, 45.0, 70.0] {
         let (rpp, flux) = plane_wave_reflection(&e, 1e6, deg, Load::Free);
-        assert!((rpp - free(deg)).abs() < 1e-12, "{deg} deg: {rpp} vs {}", free(deg));
+        assert!(
+            (rpp - free(deg)).abs() < 1e-12,
+            "{deg} deg: {rpp} vs {}",
+            free(deg)
+        );
         assert!((flux - 1.0).abs() < 1e-12, "{deg} deg: flux {flux}");
     }
     println!("Reflected energy fraction of a plane P wave in epoxy (R = 10 mm for the springs)");
@@ -219,9 +238,7 @@ fn low_band_convergence_and_tail(absorber: Absorber, fix: bool) -> Vec<(f64, f64
         let scene = Scene::build(&block(h, absorber, fix)).unwrap();
         let drive =
             signal::chirp(0.2e6, 2e6, 10e-6, 10e-6, scene.default_dt_s(), 50e3, 0.0).unwrap();
-        let out = scene
-            .transmit(&drive, &scene.run_config(duration))
-            .unwrap();
+        let out = scene.transmit(&drive, &scene.run_config(duration)).unwrap();
         let lp = signal::butterworth(4, FilterKind::LowPass(0.2e6), 1.0 / 20e-9).unwrap();
         out.traces
             .iter()

@@ -59,7 +59,10 @@ fn trace(layers: &[(Material, f64)], h: f64, depth: f64, duration: f64) -> Signa
         dt_s: Some(dt),
         ..Default::default()
     };
-    run(&model, &[src], &[receiver], &cfg).unwrap().traces.remove(0)
+    run(&model, &[src], &[receiver], &cfg)
+        .unwrap()
+        .traces
+        .remove(0)
 }
 
 /// (estimate, true relative L2 error of the finest trace) for sizes h, 2h, 4h.
@@ -88,7 +91,10 @@ fn check_reliable(name: &str, (e, truth): (Estimate, f64)) {
     println!("{name}: {} vs true {truth:.3e}", e.describe());
     assert_eq!(e.verdict, Verdict::Reliable, "{name}: {e:?}");
     let ratio = e.error.unwrap() / truth;
-    assert!((0.5..=2.0).contains(&ratio), "{name}: estimate / truth = {ratio}");
+    assert!(
+        (0.5..=2.0).contains(&ratio),
+        "{name}: estimate / truth = {ratio}"
+    );
 }
 
 fn check_refine(name: &str, (e, truth): (Estimate, f64)) {

@@ -52,6 +52,9 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         "work_precision.png",
         "work_precision.csv",
         "stability.csv",
+        "convergence.csv",
+        "convergence.png",
+        "spectra_mean_frequency.csv",
     ] {
         let path = out.join("plots").join(file);
         let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -62,5 +65,61 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         table.contains("refused") && table.contains("stopped: unstable") && table.contains("ran"),
         "{table}"
     );
+    // Estimate columns are always written; "off" when the estimate was not asked for (at
+    // smoke resolution the coarse companions cost ~22% extra, above "auto"'s 15%).
+    let focus = std::fs::read_to_string(out.join("plots/trnews_focus.csv")).unwrap();
+    assert!(
+        focus.lines().next().unwrap().contains("focused_verdict"),
+        "{focus}"
+    );
+    let convergence = std::fs::read_to_string(out.join("plots/convergence.csv")).unwrap();
+    assert!(convergence.contains("cracked,0.5,") && convergence.contains("misfit"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn error_estimate_on_fills_the_estimate_columns() {
+    let out = std::env::temp_dir().join(format!("trnews-estimates-{}", std::process::id()));
+    for script in [
+        "trnews_focus.rhai",
+        "sweep_delays.rhai",
+        "pulse_inversion.rhai",
+    ] {
+        let result = Command::new(env!("CARGO_BIN_EXE_trnews-script"))
+            .arg(std::path::Path::new("scripts").join(script))
+            .args([
+                "--set",
+                "resolution=smoke",
+                "--set",
+                "error_estimate=true",
+                "--quiet",
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            result.status.success(),
+            "{script}: {}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+    }
+    for table in [
+        "trnews_focus.csv",
+        "sweep_delays.csv",
+        "pulse_inversion.csv",
+    ] {
+        let text = std::fs::read_to_string(out.join("plots").join(table)).unwrap();
+        let rows: Vec<&str> = text.lines().skip(1).collect();
+        assert!(
+            !rows.is_empty() && rows.iter().all(|r| !r.contains(",off")),
+            "{table}: {text}"
+        );
+        assert!(
+            rows.iter()
+                .any(|r| r.contains("reliable") || r.contains("refine")),
+            "{table}: {text}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&out);
 }

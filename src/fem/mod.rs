@@ -8,8 +8,8 @@ pub mod sparse;
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::mesh::{Crack, Mesh, Side};
-use serde::{Deserialize, Serialize};
 pub use operator::StiffnessOperator;
+use serde::{Deserialize, Serialize};
 pub use sparse::BlockCsr;
 
 /// Spring factors of the 2D viscous-spring artificial boundary (Liu, Du, Wang & Wu 2006,

@@ -84,6 +84,23 @@ mod accuracy_api {
         .into()
     }
 
+    /// CSV columns [error, observed_order, verdict] of an estimate (empty strings where it has none), or ["", "", "off"] for () (no error estimate).
+    #[rhai_fn(return_raw)]
+    pub fn columns(ctx: NativeCallContext, e: Dynamic) -> Res<Array> {
+        if e.is_unit() {
+            return Ok(vec!["".into(), "".into(), "off".into()]);
+        }
+        let mut e = e.try_cast::<Estimate>().ok_or_else(|| {
+            crate::script::convert::error(&ctx, "accuracy::columns needs an Estimate or ()")
+        })?;
+        let text = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+        Ok(vec![
+            text(e.error).into(),
+            text(e.observed_order).into(),
+            verdict(&mut e).into(),
+        ])
+    }
+
     /// The estimate in words: value +- error with the observed order, or why no error is claimed.
     #[rhai_fn(global, name = "to_string", pure)]
     pub fn to_string(e: &mut Estimate) -> String {

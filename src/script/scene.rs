@@ -119,6 +119,10 @@ mod scene_api {
         m.insert("height_m".into(), (y1 - y0).into());
         m.insert("stability".into(), to_dynamic(&ctx, &scene.stability)?);
         m.insert(
+            "band".into(),
+            crate::transducer::band_label(scene.spec.transducer.as_ref()).into(),
+        );
+        m.insert(
             "clamped_epoxy_fraction".into(),
             scene.laminate.clamped_fraction().into(),
         );

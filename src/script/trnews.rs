@@ -20,13 +20,34 @@ pub fn register_types(engine: &mut Engine) {
         .register_type_with_name::<Delayed>("Delayed");
 }
 
+/// Largest companion cost (relative to the main runs) at which `error_estimate: "auto"`
+/// keeps the estimate: the 15%.
+const AUTO_ESTIMATE_MAX_COST: f64 = 0.15;
+
+/// `error_estimate`: true, false or "auto" (on when the companions cost at most 15% extra).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(untagged)]
+pub enum EstimateChoice {
+    /// On or off.
+    Flag(bool),
+    /// "auto".
+    Word(String),
+}
+
+impl Default for EstimateChoice {
+    fn default() -> Self {
+        EstimateChoice::Flag(false)
+    }
+}
+
 /// Options of `trnews::responder(scene, duration_s, options)`.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ResponderOptions {
     /// Repeat every procedure on companions with 2x and 4x the element sizes and report
-    /// Richardson error estimates (see `accuracy`).
-    pub error_estimate: bool,
+    /// Richardson error estimates (see `accuracy`): true, false, or "auto" (on when the
+    /// companions cost at most 15% of the main runs).
+    pub error_estimate: EstimateChoice,
 }
 
 /// A map of named estimates as Rhai values.
@@ -379,7 +400,7 @@ mod trnews_api {
         Ok(tr.responses[index(&ctx, k, tr.responses.len(), "receiver")?].clone())
     }
 
-    /// A responder with options #{error_estimate}: with `error_estimate: true` it also builds the scene with 2x and 4x the element sizes (same laminate draw), repeats every procedure on them (about 1/8 + 1/64 of the cost where every layer coarsens) and attaches Richardson error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
+    /// A responder with options #{error_estimate}: with `error_estimate: true` (or "auto" when that costs at most 15% extra) it also builds the scene with 2x and 4x the element sizes (same laminate draw), repeats every procedure on them (about 1/8 + 1/64 of the cost where every layer coarsens) and attaches Richardson error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
     #[rhai_fn(name = "responder", return_raw)]
     pub fn responder_with(
         ctx: NativeCallContext,
@@ -390,10 +411,26 @@ mod trnews_api {
         let o: ResponderOptions =
             options(&ctx, settings, &ResponderOptions::default(), "responder")?;
         let r = Responder::new(scene, duration_s).at(&ctx)?;
-        if o.error_estimate {
-            r.with_error_estimate(duration_s).at(&ctx)
-        } else {
-            Ok(r)
+        use super::EstimateChoice::{Flag, Word};
+        match &o.error_estimate {
+            Flag(false) => Ok(r),
+            Word(w) if w == "false" => Ok(r),
+            Flag(true) => r.with_error_estimate(duration_s).at(&ctx),
+            Word(w) if w == "true" => r.with_error_estimate(duration_s).at(&ctx),
+            Word(w) if w == "auto" => {
+                let with = r.clone().with_error_estimate(duration_s).at(&ctx)?;
+                Ok(if with.companion_cost() <= super::AUTO_ESTIMATE_MAX_COST {
+                    with
+                } else {
+                    r
+                })
+            }
+            Word(w) => Err(super::error(
+                &ctx,
+                format!(
+                    "invalid responder.error_estimate = \"{w}\": expected true, false or \"auto\""
+                ),
+            )),
         }
     }
 
@@ -401,6 +438,12 @@ mod trnews_api {
     #[rhai_fn(global, get = "error_estimate", pure)]
     pub fn has_error_estimate(r: &mut Responder) -> bool {
         !r.companions().is_empty()
+    }
+
+    /// Run time of the error estimate's companions relative to the main runs (DOFs x steps), 0 without them.
+    #[rhai_fn(global, get = "companion_cost", pure)]
+    pub fn companion_cost(r: &mut Responder) -> FLOAT {
+        r.companion_cost()
     }
 
     /// The transducer band of the responses, e.g. "0.2-2 MHz band", or "no band (raw)".
@@ -444,5 +487,4 @@ mod trnews_api {
             ])
         })
     }
-
 }
