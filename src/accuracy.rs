@@ -11,7 +11,8 @@
 //! then, if the error follows a power law, the estimate is within a factor 0.75..1.4 of the
 //! truth). When the differences shrink faster (q > p + 0.5) the same number is an upper
 //! bound of the error. Otherwise the runs are not in the asymptotic range, the verdict says
-//! "refine" and no error is claimed. Waves that travel many wavelengths converge late (their phase
+//! "refine" and no error is claimed; so does a scalar whose differences change sign
+//! (oscillating convergence). Waves that travel many wavelengths converge late (their phase
 //! error grows with distance), which is exactly when the check matters.
 //!
 //! For waveforms the differences are relative L2 norms over a window,
@@ -96,9 +97,14 @@ impl Estimate {
         Self::with_scale(fine, medium, coarse, scale, order)
     }
 
+    /// A scalar whose differences change sign (Q_h - Q_2h against Q_2h - Q_4h) converges
+    /// with oscillation, not as a power law: its verdict is "refine" whatever the ratio.
     fn with_scale(fine: f64, medium: f64, coarse: f64, scale: f64, order: f64) -> Estimate {
-        let (error, observed_order, verdict) =
-            classify((fine - medium).abs(), (medium - coarse).abs(), scale, order);
+        let (d1, d2) = (fine - medium, medium - coarse);
+        let (mut error, observed_order, mut verdict) = classify(d1.abs(), d2.abs(), scale, order);
+        if verdict != Verdict::MeshIndependent && d1 * d2 < 0.0 {
+            (error, verdict) = (None, Verdict::Refine);
+        }
         Estimate {
             waveform: false,
             value: fine,
@@ -250,6 +256,9 @@ mod tests {
     fn oscillating_or_constant_sequences() {
         let e = Estimate::scalar(1.0, 1.2, 1.0, T3_ORDER);
         assert_eq!(e.verdict, Verdict::Refine);
+        // Differences in the ratio of order 2 but of opposite signs: not a power law.
+        let sign_change = Estimate::scalar(1.0, 1.01, 0.97, T3_ORDER);
+        assert_eq!(sign_change.verdict, Verdict::Refine);
         let c = Estimate::scalar(0.5, 0.5, 0.5, T3_ORDER);
         assert_eq!(c.verdict, Verdict::MeshIndependent);
         let z = Estimate::scalar(0.0, 0.0, 0.0, T3_ORDER);
