@@ -1,16 +1,21 @@
-//! Accuracy studies with known answers: the work-precision study (error against run time)
-//! on a plane P wave, whose exact solution is v(t, d) = -p(t - d/c) / (rho c).
+//! Accuracy studies: the work-precision study (error against run time) on a plane P wave,
+//! whose exact solution is v(t, d) = -p(t - d/c) / (rho c), and the choice of a resolution
+//! for a requested accuracy on any scene ([`resolution_for_tolerance`]).
 
+use crate::accuracy::{Estimate, T3_ORDER};
 use crate::error::{require_positive, Error, Result};
 use crate::fem::Model;
 use crate::laminate::Laminate;
 use crate::material::{Material, Orthotropic, Plane};
 use crate::mesh::{Mesh, Side};
+use crate::scene::{Scene, SceneSpec};
 use crate::signal::Signal;
 use crate::solve::{
     run, segment_receiver, traction_source, Integrator, Quantity, RunConfig, RunReport, Source,
 };
+use crate::trnews::{Responder, TrNewsSpec};
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// A vertical strip of `material`, `columns` square elements of size h wide, with rollers on
 /// the sides (x fixed) so that a uniform top traction launches an exact plane P wave, and an
@@ -177,6 +182,134 @@ pub fn work_precision(spec: &WorkPrecisionSpec) -> Result<Vec<WorkPrecisionPoint
         }
     }
     Ok(points)
+}
+
+/// A resolution chosen for a requested accuracy, with its prediction.
+#[derive(Clone, Debug, Serialize)]
+pub struct ResolutionChoice {
+    /// The requested relative L2 error of the first-pass receiver responses.
+    pub tolerance: f64,
+    /// Element sizes relative to the given scene's (a power of 2; 1 keeps them).
+    pub size_factor: f64,
+    /// Chosen element size along x (m).
+    pub element_size_x_m: f64,
+    /// Chosen element size along y (m).
+    pub element_size_y_m: f64,
+    /// Pilot differences [finest vs next, next vs the one after] of the responses (largest
+    /// over receivers).
+    pub pilot_differences: [f64; 2],
+    /// Order used for the prediction: the observed one, clamped to [1, 2] (T3's).
+    pub order: f64,
+    /// Predicted relative L2 error at the chosen sizes.
+    pub predicted_error: f64,
+    /// Predicted run time of one transmission at the chosen sizes (s): the finest pilot's
+    /// scaled as DOFs x steps, size^-3.
+    pub predicted_run_time_s: f64,
+}
+
+/// Largest refinement [`resolution_for_tolerance`] proposes: 1/8 of the element sizes
+/// (about 512x the run time).
+const FINEST_FACTOR: f64 = 0.125;
+
+/// Chooses element sizes for `spec` so that the first-pass responses to the TR-NEWS chirp
+/// of `chirp` (the signal every TR-NEWS measure is derived from) have a relative L2 error
+/// below `tolerance`. Pilot: the crack-tied (linear, convolving) scene at 4h, 2h and h,
+/// extended to h/2, h/4, ... while the differences do not yet shrink; the last three levels'
+/// differences d_1 (finest vs next) and d_2 give the observed order q, clamped to [1, 2] for
+/// the prediction (a lower order refines more); error ~ d_1 / (2^q - 1) at the finest pilot
+/// level, scaling as size^q. The sizes are halved until the prediction meets the
+/// tolerance. Errors when the pilot does not converge down to 1/8 of the sizes or when
+/// more than 1/8 would be needed; either way the check after the run (an error estimate)
+/// is what decides.
+pub fn resolution_for_tolerance(
+    spec: &SceneSpec,
+    tolerance: f64,
+    chirp: &TrNewsSpec,
+) -> Result<(SceneSpec, ResolutionChoice)> {
+    if !(tolerance.is_finite() && tolerance > 0.0 && tolerance < 1.0) {
+        return Err(Error::invalid(
+            "tolerance",
+            tolerance,
+            "must be a relative error between 0 and 1",
+        ));
+    }
+    let pilot = |factor: f64| -> Result<(Vec<Signal>, f64)> {
+        let scene = Arc::new(Scene::build(&spec.coarsened(factor).uncracked())?);
+        let r = Responder::new(scene, chirp.record_s + 1e-6)?;
+        let c = crate::signal::chirp(
+            chirp.f0_hz,
+            chirp.f1_hz,
+            chirp.chirp_s,
+            chirp.signal_s,
+            r.dt_s(),
+            spec.transmitter.peak_pa,
+            chirp.taper,
+        )?;
+        let time = r.impulse_report().map_or(0.0, |rep| rep.wall_time_s);
+        Ok((r.respond(&c, chirp.record_s)?.traces, time))
+    };
+    // Pilot triples (f, 2f, 4f) from f = 1 down until the differences shrink.
+    let mut levels = vec![pilot(4.0)?, pilot(2.0)?];
+    let mut finest = 1.0f64;
+    let (d1, d2) = loop {
+        levels.push(pilot(finest)?);
+        let [coarse, medium, fine] = &levels[levels.len() - 3..] else {
+            unreachable!("at least three pilot levels")
+        };
+        let (mut d1, mut d2) = (0.0f64, 0.0f64);
+        for k in 0..fine.0.len() {
+            let window = (0.0, chirp.record_s);
+            let e = Estimate::waveform(&fine.0[k], &medium.0[k], &coarse.0[k], window, T3_ORDER)?;
+            d1 = d1.max(e.companions[0]);
+            d2 = d2.max(e.companions[1]);
+        }
+        if d2 > d1 && d1 > 0.0 {
+            break (d1, d2);
+        }
+        if finest <= FINEST_FACTOR {
+            return Err(Error::invalid(
+                "tolerance",
+                tolerance,
+                format!(
+                    "cannot be predicted: the responses do not converge down to 1/8 of the \
+                     element sizes (differences {d2:.3e}, {d1:.3e}); check with an error estimate"
+                ),
+            ));
+        }
+        finest *= 0.5;
+    };
+    let time = levels[levels.len() - 1].1;
+    let order = (d2 / d1).log2().clamp(1.0, T3_ORDER);
+    let error_at_finest = d1 / (2f64.powf(order) - 1.0);
+    let mut factor = finest;
+    while error_at_finest * (factor / finest).powf(order) > tolerance {
+        factor *= 0.5;
+        if factor < FINEST_FACTOR {
+            return Err(Error::invalid(
+                "tolerance",
+                tolerance,
+                format!(
+                    "needs element sizes below 1/8 of the scene's (predicted error {:.2e} at \
+                     1/8, about 512x the run time)",
+                    error_at_finest * (FINEST_FACTOR / finest).powf(order)
+                ),
+            ));
+        }
+    }
+    let predicted_error = error_at_finest * (factor / finest).powf(order);
+    let predicted_run_time_s = time * (factor / finest).powi(-3);
+    let chosen = spec.coarsened(factor);
+    let choice = ResolutionChoice {
+        tolerance,
+        size_factor: factor,
+        element_size_x_m: chosen.element_size_x_m,
+        element_size_y_m: chosen.element_size_y_m,
+        pilot_differences: [d1, d2],
+        order,
+        predicted_error,
+        predicted_run_time_s,
+    };
+    Ok((chosen, choice))
 }
 
 #[cfg(test)]

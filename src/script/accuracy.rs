@@ -101,6 +101,25 @@ mod accuracy_api {
         ])
     }
 
+    /// The check of a requested accuracy after a run: "met", "not met" or "unknown" with the estimate, for a relative `tolerance` (waveforms: relative L2 error; scalars: error relative to the value).
+    pub fn check(e: Estimate, tolerance: FLOAT) -> String {
+        let relative = |err: f64| {
+            if e.waveform {
+                err
+            } else {
+                err / e.value.abs()
+            }
+        };
+        match (e.verdict, e.error) {
+            (Verdict::MeshIndependent, _) => format!("met (unchanged between meshes)"),
+            (Verdict::Reliable | Verdict::UpperBound, Some(err)) if relative(err) <= tolerance => {
+                format!("met: {} <= {tolerance}", e.describe())
+            }
+            (Verdict::Reliable, Some(_)) => format!("not met: {} > {tolerance}", e.describe()),
+            _ => format!("unknown: {}", e.describe()),
+        }
+    }
+
     /// The estimate in words: value +- error with the observed order, or why no error is claimed.
     #[rhai_fn(global, name = "to_string", pure)]
     pub fn to_string(e: &mut Estimate) -> String {
