@@ -201,6 +201,27 @@ impl Estimate {
             ),
         }
     }
+
+    /// A short form for figure titles: "err 3.1%", "err < 3.1%", "err ? (2h: 30%)" for
+    /// waveforms (relative L2); "0.138 +- 4.5e-4", "0.138 (err ?, 2h: 1.3e-2)" for scalars.
+    pub fn brief(&self) -> String {
+        if self.waveform {
+            let pct = |x: f64| format!("{:.1}%", 100.0 * x);
+            return match (self.verdict, self.error) {
+                (Verdict::Reliable, Some(e)) => format!("err {}", pct(e)),
+                (Verdict::UpperBound, Some(e)) => format!("err < {}", pct(e)),
+                (Verdict::MeshIndependent, _) => "mesh-independent".into(),
+                _ => format!("err ? (2h: {})", pct(self.companions[0])),
+            };
+        }
+        let change = (self.value - self.companions[0]).abs();
+        match (self.verdict, self.error) {
+            (Verdict::Reliable, Some(e)) => format!("{:.3} +- {e:.1e}", self.value),
+            (Verdict::UpperBound, Some(e)) => format!("{:.3} +- < {e:.1e}", self.value),
+            (Verdict::MeshIndependent, _) => format!("{:.3} (mesh-independent)", self.value),
+            _ => format!("{:.3} (err ?, 2h: {change:.1e})", self.value),
+        }
+    }
 }
 
 /// (error, observed order, verdict) from the differences d1 = |Q_h - Q_2h| and

@@ -1,7 +1,7 @@
 //! The report's figures from library results: each function turns a result into a
 //! [`crate::plot`] call with titles, units and legends (PNG or SVG by extension).
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::plot::{field_plot, line_plot, stacked_plot, Axes, Overlay, Panel, Scale, Series};
 use crate::scene::Scene;
 use crate::signal::{self, Signal, Window};
@@ -57,7 +57,7 @@ pub fn pulse_inversion(path: &Path, envelope_path: Option<&Path>, tr: &TrNews) -
     for f in &tr.focus {
         let Some(sum) = &f.pi_sum else { continue };
         let residual = match f.estimates.as_ref().and_then(|e| e.pi_residual) {
-            Some(e) => e.describe(),
+            Some(e) => e.brief(),
             None => format!("{:.3}", sum.max_abs() / f.focused.max_abs()),
         };
         panels.push(Panel {
@@ -139,6 +139,16 @@ pub fn delayed(path: &Path, title: &str, d: &Delayed) -> Result<()> {
 
 /// Displacement component of a snapshot over the mesh, with layer interfaces and the crack (Fig. 19).
 pub fn snapshot(path: &Path, scene: &Scene, snap: &Snapshot, component: usize) -> Result<()> {
+    snapshot_titled(path, scene, snap, component, "")
+}
+
+fn snapshot_titled(
+    path: &Path,
+    scene: &Scene,
+    snap: &Snapshot,
+    component: usize,
+    prefix: &str,
+) -> Result<()> {
     let mesh = &scene.model.mesh;
     let values: Vec<f64> = snap
         .displacement
@@ -165,7 +175,8 @@ pub fn snapshot(path: &Path, scene: &Scene, snap: &Snapshot, component: usize) -
         });
     }
     let name = if component == 0 { "u_x" } else { "u_y" };
-    let title = format!("{name} at t = {:.2} us", snap.time_s * 1e6);
+    let band = crate::transducer::band_label(scene.spec.transducer.as_ref());
+    let title = format!("{prefix}{name} at t = {:.2} us ({band})", snap.time_s * 1e6);
     Ok(field_plot(
         path,
         &axes(&title, "x (m)", "y (m)"),
@@ -175,6 +186,48 @@ pub fn snapshot(path: &Path, scene: &Scene, snap: &Snapshot, component: usize) -
         &overlays,
         &format!("{name} (m)"),
     )?)
+}
+
+/// The field the crack scatters: a snapshot of the cracked scene minus the same snapshot of
+/// its crack-tied companion (same mesh and step, same source), on the cracked mesh. Nodes
+/// of the lower crack face take the companion's value at their upper-face twin. Shows the
+/// crack as a new source (report Fig. 19 and Sec. 5.2's "virtual transducer").
+pub fn scattered_snapshot(
+    path: &Path,
+    cracked: &Scene,
+    snap: &Snapshot,
+    tied: &Snapshot,
+    component: usize,
+) -> Result<()> {
+    let crack = cracked
+        .model
+        .crack
+        .as_ref()
+        .ok_or_else(|| Error::invalid("scene", "uncracked", "has no crack to scatter from"))?;
+    let tied_nodes = tied.displacement.len() / 2;
+    let mut twin: Vec<usize> = (0..cracked.model.mesh.nodes.len()).collect();
+    for p in &crack.pairs {
+        twin[p.slave] = p.master;
+    }
+    if twin.iter().any(|&n| n >= tied_nodes) || (snap.time_s - tied.time_s).abs() > 1e-12 {
+        return Err(Error::invalid(
+            "uncracked run",
+            format!("{tied_nodes} nodes at t = {:e} s", tied.time_s),
+            "must be the crack-tied companion's snapshot at the same time",
+        ));
+    }
+    let scattered: Vec<f64> = twin
+        .iter()
+        .enumerate()
+        .flat_map(|(n, &t)| {
+            [0, 1].map(|c| snap.displacement[2 * n + c] - tied.displacement[2 * t + c])
+        })
+        .collect();
+    let difference = Snapshot {
+        time_s: snap.time_s,
+        displacement: scattered,
+    };
+    snapshot_titled(path, cracked, &difference, component, "scattered by the crack: ")
 }
 
 /// Error against run time on log-log axes, one curve per integrator and step choice.

@@ -107,11 +107,6 @@ impl Responder {
         &self.companions
     }
 
-    /// The scene it answers for.
-    pub fn scene(&self) -> &Arc<Scene> {
-        &self.scene
-    }
-
     /// The solver step of every response (s).
     pub fn dt_s(&self) -> f64 {
         self.dt_s

@@ -45,6 +45,7 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         "trnews_focus.png",
         "trnews_snapshot.png",
         "trnews_snapshot.vtu",
+        "trnews_scattered.png",
         "pulse_inversion.png",
         "pulse_inversion_envelopes.png",
         "spectra_input_output.png",

@@ -120,6 +120,12 @@ mod accuracy_api {
         }
     }
 
+    /// A short form for figure titles, e.g. "0.138 (err ?, 2h: 1.3e-2)", or "err 3.1%" / "err ? (2h: 30%)" for a waveform.
+    #[rhai_fn(global, get = "brief", pure)]
+    pub fn brief(e: &mut Estimate) -> String {
+        e.brief()
+    }
+
     /// The estimate in words: value +- error with the observed order, or why no error is claimed.
     #[rhai_fn(global, name = "to_string", pure)]
     pub fn to_string(e: &mut Estimate) -> String {

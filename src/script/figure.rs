@@ -127,6 +127,29 @@ mod figure_api {
         .at(&ctx)
     }
 
+    /// The field scattered by the crack (Fig. 19, the crack as a new source): snapshot `k` of a run of the cracked `scene` minus snapshot `k` of the same transmission on its crack-tied companion (`scene.uncracked()`: same mesh and step), component 0 = u_x, 1 = u_y.
+    #[rhai_fn(return_raw)]
+    pub fn scattered_snapshot(
+        ctx: NativeCallContext,
+        path: &str,
+        scene: SceneRef,
+        cracked_run: RunRef,
+        tied_run: RunRef,
+        k: INT,
+        component: INT,
+    ) -> Res<()> {
+        let snap = &cracked_run.snapshots[index(&ctx, k, cracked_run.snapshots.len(), "snapshot")?];
+        let tied = &tied_run.snapshots[index(&ctx, k, tied_run.snapshots.len(), "snapshot")?];
+        figures::scattered_snapshot(
+            &output(&ctx, path)?,
+            &scene,
+            snap,
+            tied,
+            usize::from(component == 1),
+        )
+        .at(&ctx)
+    }
+
     /// Error against run time on log-log axes from a work-precision study.
     #[rhai_fn(return_raw)]
     pub fn work_precision(ctx: NativeCallContext, path: &str, wp: WorkPrecision) -> Res<()> {
