@@ -227,7 +227,13 @@ pub fn scattered_snapshot(
         time_s: snap.time_s,
         displacement: scattered,
     };
-    snapshot_titled(path, cracked, &difference, component, "scattered by the crack: ")
+    snapshot_titled(
+        path,
+        cracked,
+        &difference,
+        component,
+        "scattered by the crack: ",
+    )
 }
 
 /// Error against run time on log-log axes, one curve per integrator and step choice.

@@ -76,15 +76,35 @@ impl Responder {
         Ok(r)
     }
 
-    /// Adds the companions of an error estimate: the same scene (same laminate draw) with
-    /// 2x and 4x the element sizes, each with its own stable step, built the way this one
-    /// was (convolving when linear, over `duration_s`). They cost about 1/8 and 1/64 of a
-    /// run where every layer coarsens, more where thin layers keep one element row.
-    pub fn with_error_estimate(mut self, duration_s: f64) -> Result<Responder> {
-        self.companions = [2.0, 4.0]
+    /// The scenes of an error estimate's companions: this scene (same laminate draw) with 2x
+    /// and 4x the element sizes, each with its own stable step, and their run time relative
+    /// to this responder's from DOFs x steps, sum over companions of (DOFs_c / DOFs)
+    /// (dt / dt_c). About 1/8 + 1/64 where every layer coarsens, more where thin layers keep
+    /// one element row or set the step. Building them runs no simulation.
+    pub fn companion_scenes(&self) -> Result<(Vec<Arc<Scene>>, f64)> {
+        let scenes = [2.0, 4.0]
             .into_iter()
-            .map(|factor| {
-                let scene = Arc::new(Scene::build(&self.scene.spec.coarsened(factor))?);
+            .map(|factor| Ok(Arc::new(Scene::build(&self.scene.spec.coarsened(factor))?)))
+            .collect::<Result<Vec<_>>>()?;
+        let work = |s: &Scene, dt: f64| s.model.dofs() as f64 / dt;
+        let cost = scenes
+            .iter()
+            .map(|s| work(s, s.default_dt_s()))
+            .sum::<f64>()
+            / work(&self.scene, self.dt_s);
+        Ok((scenes, cost))
+    }
+
+    /// Adds companions on `scenes` (from [`Responder::companion_scenes`]), built the way this
+    /// one was (convolving when linear, over `duration_s`).
+    pub fn with_companions(
+        mut self,
+        scenes: Vec<Arc<Scene>>,
+        duration_s: f64,
+    ) -> Result<Responder> {
+        self.companions = scenes
+            .into_iter()
+            .map(|scene| {
                 if self.impulse.is_some() {
                     Responder::new(scene, duration_s)
                 } else {
@@ -95,11 +115,10 @@ impl Responder {
         Ok(self)
     }
 
-    /// Run time of the companions relative to this responder's, from DOFs x steps:
-    /// sum over companions of (DOFs_c / DOFs) (dt / dt_c). 0 without companions.
-    pub fn companion_cost(&self) -> f64 {
-        let work = |r: &Responder| r.scene.model.dofs() as f64 / r.dt_s;
-        self.companions.iter().map(work).sum::<f64>() / work(self)
+    /// Adds the companions of an error estimate (see [`Responder::companion_scenes`]).
+    pub fn with_error_estimate(self, duration_s: f64) -> Result<Responder> {
+        let (scenes, _) = self.companion_scenes()?;
+        self.with_companions(scenes, duration_s)
     }
 
     /// The companions of the error estimate (2h, 4h), empty without one.
@@ -576,8 +595,7 @@ pub fn delayed_tr_news(
     half_window_s: f64,
 ) -> Result<Vec<Delayed>> {
     let mut main = delayed_once(responder, tr, focus, points, half_window_s)?;
-    let (&[ref rm, ref rc], &[ref tm, ref tc]) = (&responder.companions[..], &tr.companions[..])
-    else {
+    let ([rm, rc], [tm, tc]) = (&responder.companions[..], &tr.companions[..]) else {
         return Ok(main);
     };
     let on = |r: &Responder, t: &TrNews| -> Result<Vec<Delayed>> {

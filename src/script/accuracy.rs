@@ -111,7 +111,7 @@ mod accuracy_api {
             }
         };
         match (e.verdict, e.error) {
-            (Verdict::MeshIndependent, _) => format!("met (unchanged between meshes)"),
+            (Verdict::MeshIndependent, _) => "met (unchanged between meshes)".to_string(),
             (Verdict::Reliable | Verdict::UpperBound, Some(err)) if relative(err) <= tolerance => {
                 format!("met: {} <= {tolerance}", e.describe())
             }

@@ -418,12 +418,18 @@ mod trnews_api {
             Flag(true) => r.with_error_estimate(duration_s).at(&ctx),
             Word(w) if w == "true" => r.with_error_estimate(duration_s).at(&ctx),
             Word(w) if w == "auto" => {
-                let with = r.clone().with_error_estimate(duration_s).at(&ctx)?;
-                Ok(if with.companion_cost() <= super::AUTO_ESTIMATE_MAX_COST {
-                    with
-                } else {
-                    r
-                })
+                let (scenes, cost) = r.companion_scenes().at(&ctx)?;
+                if cost <= super::AUTO_ESTIMATE_MAX_COST {
+                    return r.with_companions(scenes, duration_s).at(&ctx);
+                }
+                crate::script::HostContext::of(&ctx)?.print(&format!(
+                    "error estimate off: the 2h and 4h companions would add {:.0}% to the run \
+                     time (auto allows {:.0}%); results carry no discretisation error \
+                     (error_estimate = true turns it on)",
+                    100.0 * cost,
+                    100.0 * super::AUTO_ESTIMATE_MAX_COST
+                ));
+                Ok(r)
             }
             Word(w) => Err(super::error(
                 &ctx,
@@ -440,10 +446,10 @@ mod trnews_api {
         !r.companions().is_empty()
     }
 
-    /// Run time of the error estimate's companions relative to the main runs (DOFs x steps), 0 without them.
-    #[rhai_fn(global, get = "companion_cost", pure)]
-    pub fn companion_cost(r: &mut Responder) -> FLOAT {
-        r.companion_cost()
+    /// Run time the error estimate's companions add relative to the main runs (DOFs x steps), whether or not the responder has them.
+    #[rhai_fn(global, get = "companion_cost", pure, return_raw)]
+    pub fn companion_cost(ctx: NativeCallContext, r: &mut Responder) -> Res<FLOAT> {
+        Ok(r.companion_scenes().at(&ctx)?.1)
     }
 
     /// The transducer band of the responses, e.g. "0.2-2 MHz band", or "no band (raw)".
