@@ -51,6 +51,23 @@ pub enum Error {
     /// The contact algorithm failed (for example an augmented-Lagrangian penalty above its stable bound).
     #[error("contact: {0}")]
     Contact(String),
+    /// Work stopped by the time limit or Ctrl-C (see [`crate::budget`]).
+    #[error("stopped: {0}")]
+    Stopped(crate::budget::Stop),
+    /// The estimated memory of a request exceeds the limit (see [`crate::scene::memory_limit`]).
+    #[error("{field} = {value} would need about {estimate} of memory, above the limit of {limit} (set with --max-memory); {hint}")]
+    TooLarge {
+        /// The field the user wrote.
+        field: String,
+        /// Its value.
+        value: String,
+        /// The estimate, formatted (e.g. "12.3 GiB").
+        estimate: String,
+        /// The limit, formatted.
+        limit: String,
+        /// What to change.
+        hint: String,
+    },
     /// Signal processing error.
     #[error(transparent)]
     Signal(#[from] crate::signal::SignalError),
@@ -60,6 +77,12 @@ pub enum Error {
     /// Rendering a figure failed.
     #[error(transparent)]
     Plot(#[from] crate::plot::PlotError),
+}
+
+impl From<crate::budget::Stop> for Error {
+    fn from(s: crate::budget::Stop) -> Self {
+        Error::Stopped(s)
+    }
 }
 
 /// Library result type.

@@ -14,6 +14,7 @@ mod accuracy;
 mod convert;
 mod figure;
 mod format;
+mod guard;
 mod host;
 mod io;
 mod laminate;
@@ -140,6 +141,7 @@ fn one_line(message: &str) -> String {
 #[derive(Debug)]
 pub struct HostContext {
     out_dir: PathBuf,
+    root: Option<crate::io::OutputRoot>,
     params: BTreeMap<String, Dynamic>,
     quiet: bool,
     script: RwLock<String>,
@@ -169,8 +171,10 @@ impl HostContext {
         self.quiet
     }
 
-    /// Resolves a script-given output path under the output directory and creates its
-    /// parent directories. Absolute paths and `..` components are rejected, naming the path.
+    /// Resolves a script-given output path under the output directory. Absolute paths and
+    /// `..` components are rejected, naming the path. Directories are created when the file
+    /// is written, beneath the output root opened by the host: a symlink that leads out of it
+    /// is refused then (see [`crate::io::OutputRoot`]).
     pub fn resolve_output(&self, path: &str) -> Result<PathBuf, String> {
         let rel = Path::new(path);
         if path.is_empty() {
@@ -190,12 +194,10 @@ impl HostContext {
                 "output path '{path}' leaves the output directory ('..' is not allowed)"
             ));
         }
-        let full = self.out_dir.join(rel);
-        if let Some(parent) = full.parent() {
-            std::fs::create_dir_all(parent)
-                .map_err(|e| format!("cannot create directory {}: {e}", parent.display()))?;
+        if rel.file_name().is_none() {
+            return Err(format!("output path '{path}' names no file"));
         }
-        Ok(full)
+        Ok(self.out_dir.join(rel))
     }
 
     /// Prints a script message to stderr, prefixed with the script name, without
@@ -255,15 +257,13 @@ impl Host {
         for name in options.params.keys() {
             check_param_name(name).map_err(|m| ScriptError::new("--set", m))?;
         }
-        std::fs::create_dir_all(&options.out_dir).map_err(|e| {
-            ScriptError::new(
-                options.out_dir.display().to_string(),
-                format!("cannot create output directory: {e}"),
-            )
+        let root = crate::io::OutputRoot::open(&options.out_dir).map_err(|e| {
+            ScriptError::new(options.out_dir.display().to_string(), e.to_string())
         })?;
         crate::solve::show_progress(!options.quiet);
         let context = Arc::new(HostContext {
             out_dir: options.out_dir,
+            root: Some(root),
             params: options.params,
             quiet: options.quiet,
             script: RwLock::new(String::new()),
@@ -299,9 +299,40 @@ impl Host {
         let ast = self.compile(name, text)?;
         let mut scope = self.scope();
         self.context.start(name);
-        let result = self.engine.run_ast_with_scope(&mut scope, &ast);
+        let result = self.guarded(name, || {
+            let mut run = || self.engine.run_ast_with_scope(&mut scope, &ast);
+            match &self.context.root {
+                Some(root) => root.within(run),
+                None => run(),
+            }
+        });
         self.context.finish();
-        result.map_err(|e| self.render(name, &e))
+        result?.map_err(|e| self.render(name, &e))
+    }
+
+    /// Runs `f`, turning a panic that escaped a native function into a [`ScriptError`] at the
+    /// script position last reached (no input should get there: this is the last line of
+    /// defence, and the message says it is a bug).
+    fn guarded<T>(&self, name: &str, f: impl FnOnce() -> T) -> Result<T, ScriptError> {
+        guard::reset();
+        let _guarded = guard::Guarded::start();
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|payload| {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            let message = format!(
+                "internal error (a bug, please report it): {what}{}",
+                guard::panic_location()
+                    .map(|l| format!(" at {l}"))
+                    .unwrap_or_default()
+            );
+            match guard::last_position() {
+                Some(pos) => ScriptError::at(name, pos, &message),
+                None => ScriptError::new(name, message),
+            }
+        })
     }
 
     /// The function list of `--api`, grouped by module.
@@ -411,6 +442,16 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
         .set_module_resolver(DummyModuleResolver::new())
         .set_default_tag(Dynamic::from(Arc::clone(context)))
         .disable_symbol("eval");
+    // Statement-level position tracking, so that a panic escaping a native function is
+    // still reported at file:line:col (see `guard`).
+    #[allow(deprecated)] // "volatile", not deprecated (rhai 1.27)
+    engine.register_debugger(
+        |_, debugger| debugger,
+        |_, _, _, _, pos| {
+            guard::note(pos);
+            Ok(rhai::debugger::DebuggerCommand::StepInto)
+        },
+    );
     let printer = Arc::clone(context);
     engine.on_print(move |text| printer.print(text));
     let debugger = Arc::clone(context);
@@ -582,6 +623,7 @@ mod tests {
     fn context(dir: &Path) -> HostContext {
         HostContext {
             out_dir: dir.to_path_buf(),
+            root: None,
             params: BTreeMap::new(),
             quiet: true,
             script: RwLock::new(String::new()),
@@ -595,15 +637,11 @@ mod tests {
         let ctx = context(&dir);
         let ok = ctx.resolve_output("plots/a/b.png").expect("relative path");
         assert_eq!(ok, dir.join("plots/a/b.png"));
-        assert!(
-            dir.join("plots/a").is_dir(),
-            "parent directories are created"
-        );
         for bad in ["../x.png", "a/../../x.png", "/tmp/x.png", ""] {
             let e = ctx.resolve_output(bad).expect_err(bad);
             assert!(e.contains(&format!("'{bad}'")) || bad.is_empty(), "{e}");
         }
-        std::fs::remove_dir_all(&dir).expect("clean up");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -196,6 +196,9 @@ pub(super) fn run(
     let clock = Instant::now();
 
     for step in 0..steps {
+        if step % 256 == 0 {
+            crate::budget::check()?;
+        }
         if step % config.ledger_every == 0 {
             sample_ledger(
                 model,

@@ -217,6 +217,9 @@ pub(super) fn run(
     let (c1, c2) = (4.0 / (dt * dt), 4.0 / dt);
 
     for step in 0..steps {
+        if step % 256 == 0 {
+            crate::budget::check()?;
+        }
         if step % config.ledger_every == 0 {
             sample(
                 model,

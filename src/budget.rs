@@ -1,0 +1,84 @@
+//! Process-wide stop conditions for long native work: a wall-clock deadline and a cancel flag
+//! (set by Ctrl-C in `trnews-script`). Solvers and long loops call [`check`] now and then
+//! (cheap: one atomic load, and one clock read when a deadline is set) and stop with
+//! [`crate::Error::Stopped`], so a script's time limit and Ctrl-C also stop a native run
+//! cleanly, between steps, with its outputs either complete or not written.
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+static CANCELLED: AtomicBool = AtomicBool::new(false);
+/// Deadline as nanoseconds after [`epoch`], plus one; 0 means no deadline.
+static DEADLINE_NS: AtomicU64 = AtomicU64::new(0);
+/// The time limit as set, in milliseconds (for messages).
+static LIMIT_MS: AtomicU64 = AtomicU64::new(0);
+
+fn epoch() -> Instant {
+    static EPOCH: OnceLock<Instant> = OnceLock::new();
+    *EPOCH.get_or_init(Instant::now)
+}
+
+/// Why work was stopped.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Stop {
+    /// Ctrl-C (or [`cancel`]).
+    Interrupted,
+    /// The wall-clock limit (seconds) was reached.
+    TimeLimit(f64),
+}
+
+impl std::fmt::Display for Stop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stop::Interrupted => write!(f, "interrupted (Ctrl-C)"),
+            Stop::TimeLimit(s) => write!(
+                f,
+                "time limit {s} s reached (raise it with --time-limit)"
+            ),
+        }
+    }
+}
+
+/// Starts a budget: clears the cancel flag and sets the deadline `limit` from now (none if `None`).
+pub fn start(limit: Option<Duration>) {
+    CANCELLED.store(false, Ordering::SeqCst);
+    match limit {
+        Some(d) => {
+            let at = (Instant::now() + d).saturating_duration_since(epoch());
+            let ns = u64::try_from(at.as_nanos()).unwrap_or(u64::MAX - 1);
+            LIMIT_MS.store(d.as_millis().min(u64::MAX as u128) as u64, Ordering::SeqCst);
+            DEADLINE_NS.store(ns.saturating_add(1), Ordering::SeqCst);
+        }
+        None => DEADLINE_NS.store(0, Ordering::SeqCst),
+    }
+}
+
+/// Removes the deadline (the cancel flag stays as it is).
+pub fn clear() {
+    DEADLINE_NS.store(0, Ordering::SeqCst);
+}
+
+/// Asks running work to stop at its next [`check`] (Ctrl-C handler).
+pub fn cancel() {
+    CANCELLED.store(true, Ordering::SeqCst);
+}
+
+/// True once [`cancel`] was called (until the next [`start`]).
+pub fn cancelled() -> bool {
+    CANCELLED.load(Ordering::Relaxed)
+}
+
+/// `Err` when work must stop: cancelled, or past the deadline.
+pub fn check() -> Result<(), Stop> {
+    if CANCELLED.load(Ordering::Relaxed) {
+        return Err(Stop::Interrupted);
+    }
+    let d = DEADLINE_NS.load(Ordering::Relaxed);
+    if d != 0 && epoch().elapsed().as_nanos() as u64 >= d - 1 {
+        return Err(Stop::TimeLimit(
+            LIMIT_MS.load(Ordering::Relaxed) as f64 / 1000.0,
+        ));
+    }
+    Ok(())
+}
