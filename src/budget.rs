@@ -82,3 +82,53 @@ pub fn check() -> Result<(), Stop> {
     }
     Ok(())
 }
+
+/// Default memory limit of one request (scene, run, signal): 8 GiB.
+pub const DEFAULT_MEMORY_LIMIT: u64 = 8 << 30;
+static MEMORY_LIMIT: AtomicU64 = AtomicU64::new(DEFAULT_MEMORY_LIMIT);
+
+/// Sets the memory limit (bytes) that [`check_memory`] compares estimates against.
+pub fn set_memory_limit(bytes: u64) {
+    MEMORY_LIMIT.store(bytes.max(1), Ordering::SeqCst);
+}
+
+/// The memory limit in bytes.
+pub fn memory_limit() -> u64 {
+    MEMORY_LIMIT.load(Ordering::Relaxed)
+}
+
+/// Bytes as `12.3 GiB` (binary prefixes; enormous estimates in scientific notation).
+pub fn format_bytes(bytes: f64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    if !bytes.is_finite() || bytes >= 1024f64.powi(5) {
+        return format!("{bytes:.2e} B");
+    }
+    let mut v = bytes;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    format!("{v:.3} {}", UNITS[u])
+}
+
+/// Refuses a request whose estimated memory `bytes` (computed in floating point, so that it
+/// cannot overflow) exceeds the limit: the error names `field` with `value` and says `hint`.
+pub fn check_memory(
+    field: &str,
+    value: impl std::fmt::Display,
+    bytes: f64,
+    hint: &str,
+) -> crate::Result<()> {
+    let limit = memory_limit();
+    if bytes.is_finite() && bytes <= limit as f64 {
+        return Ok(());
+    }
+    Err(crate::Error::TooLarge {
+        field: field.to_string(),
+        value: value.to_string(),
+        estimate: format_bytes(bytes),
+        limit: format_bytes(limit as f64),
+        hint: hint.to_string(),
+    })
+}

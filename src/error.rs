@@ -68,6 +68,9 @@ pub enum Error {
         /// What to change.
         hint: String,
     },
+    /// An error already worded in the user's field names (e.g. a TR-NEWS spec's).
+    #[error("{0}")]
+    Named(String),
     /// Signal processing error.
     #[error(transparent)]
     Signal(#[from] crate::signal::SignalError),

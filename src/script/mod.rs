@@ -79,6 +79,10 @@ pub struct HostOptions {
     pub max_operations: u64,
     /// Hide progress display (script `print` output is still shown).
     pub quiet: bool,
+    /// Wall-clock limit of a script run, native work included (`--time-limit`); `None`: none.
+    pub time_limit: Option<Duration>,
+    /// Memory limit of one request (a scene, a run, a signal) in bytes (`--max-memory`).
+    pub max_memory: u64,
 }
 
 impl Default for HostOptions {
@@ -88,6 +92,8 @@ impl Default for HostOptions {
             params: BTreeMap::new(),
             max_operations: DEFAULT_MAX_OPERATIONS,
             quiet: false,
+            time_limit: None,
+            max_memory: crate::budget::DEFAULT_MEMORY_LIMIT,
         }
     }
 }
@@ -249,6 +255,7 @@ pub struct Host {
     engine: Engine,
     context: Arc<HostContext>,
     max_operations: u64,
+    time_limit: Option<Duration>,
 }
 
 impl Host {
@@ -257,6 +264,26 @@ impl Host {
         for name in options.params.keys() {
             check_param_name(name).map_err(|m| ScriptError::new("--set", m))?;
         }
+        if options.max_operations == 0 {
+            // Rhai reads 0 as "unlimited": refuse it rather than drop the limit silently.
+            return Err(ScriptError::new(
+                "--max-operations",
+                "0 is not a limit; give a positive operation budget",
+            ));
+        }
+        if let Some(t) = options.time_limit.filter(|t| t.is_zero()) {
+            return Err(ScriptError::new(
+                "--time-limit",
+                format!("{} s is not a limit; give a positive number of seconds", t.as_secs_f64()),
+            ));
+        }
+        if options.max_memory == 0 {
+            return Err(ScriptError::new(
+                "--max-memory",
+                "0 is not a limit; give a positive size",
+            ));
+        }
+        crate::budget::set_memory_limit(options.max_memory);
         let root = crate::io::OutputRoot::open(&options.out_dir).map_err(|e| {
             ScriptError::new(options.out_dir.display().to_string(), e.to_string())
         })?;
@@ -274,6 +301,7 @@ impl Host {
             engine,
             context,
             max_operations: options.max_operations,
+            time_limit: options.time_limit,
         })
     }
 
@@ -299,6 +327,7 @@ impl Host {
         let ast = self.compile(name, text)?;
         let mut scope = self.scope();
         self.context.start(name);
+        crate::budget::start(self.time_limit);
         let result = self.guarded(name, || {
             let mut run = || self.engine.run_ast_with_scope(&mut scope, &ast);
             match &self.context.root {
@@ -307,6 +336,7 @@ impl Host {
             }
         });
         self.context.finish();
+        crate::budget::clear();
         result?.map_err(|e| self.render(name, &e))
     }
 
@@ -368,6 +398,7 @@ impl Host {
         let inner = err.unwrap_inner();
         let base = match inner {
             EvalAltResult::ErrorRuntime(value, _) => value.to_string(),
+            EvalAltResult::ErrorTerminated(token, _) => token.to_string(),
             EvalAltResult::ErrorTooManyOperations(_) => format!(
                 "operation limit {} exceeded (endless loop? raise it with --max-operations)",
                 self.max_operations
@@ -442,6 +473,13 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
         .set_module_resolver(DummyModuleResolver::new())
         .set_default_tag(Dynamic::from(Arc::clone(context)))
         .disable_symbol("eval");
+    // The time limit and Ctrl-C, checked between operations (native calls check them too,
+    // in their long loops: see `crate::budget`).
+    engine.on_progress(|_| {
+        crate::budget::check()
+            .err()
+            .map(|stop| Dynamic::from(stop.to_string()))
+    });
     // Statement-level position tracking, so that a panic escaping a native function is
     // still reported at file:line:col (see `guard`).
     #[allow(deprecated)] // "volatile", not deprecated (rhai 1.27)
@@ -491,7 +529,8 @@ fn check_param_name(name: &str) -> Result<(), String> {
 pub fn parse_param_value(text: &str) -> Dynamic {
     if let Ok(i) = text.parse::<rhai::INT>() {
         Dynamic::from_int(i)
-    } else if let Ok(f) = text.parse::<rhai::FLOAT>() {
+    } else if let Some(f) = text.parse::<rhai::FLOAT>().ok().filter(|f| f.is_finite()) {
+        // "nan" and "inf" stay strings: a parameter never smuggles in a non-finite number
         Dynamic::from_float(f)
     } else if let Ok(b) = text.parse::<bool>() {
         Dynamic::from_bool(b)

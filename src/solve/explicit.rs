@@ -134,7 +134,7 @@ pub(super) fn run(
             ratio,
         });
     }
-    let steps = (config.duration_s / dt).round().max(1.0) as usize;
+    let steps = super::run_steps(model, sources.len(), receivers.len(), config, dt)?;
     let n = model.dofs();
     let coef = Coefficients::new(model, dt);
     let forces = sample_sources(sources, dt, steps)?;

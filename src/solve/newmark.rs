@@ -135,7 +135,7 @@ pub(super) fn run(
     let dt = config
         .dt_s
         .ok_or_else(|| Error::invalid("dt_s", "none", "Newmark needs an explicit time step"))?;
-    let steps = (config.duration_s / dt).round().max(1.0) as usize;
+    let steps = super::run_steps(model, sources.len(), receivers.len(), config, dt)?;
     let n = model.dofs();
     let mut fixed = vec![false; n];
     for &d in &model.fixed_dofs {
