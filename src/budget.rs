@@ -9,10 +9,16 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 static CANCELLED: AtomicBool = AtomicBool::new(false);
-/// Deadline as nanoseconds after [`epoch`], plus one; 0 means no deadline.
-static DEADLINE_NS: AtomicU64 = AtomicU64::new(0);
-/// The time limit as set, in milliseconds (for messages).
-static LIMIT_MS: AtomicU64 = AtomicU64::new(0);
+
+// The deadline and the memory limit belong to the thread that runs a script (the solvers'
+// step loops run on it too), so that hosts on different threads do not share them.
+thread_local! {
+    /// Deadline as nanoseconds after [`epoch`], plus one; 0 means no deadline.
+    static DEADLINE_NS: AtomicU64 = const { AtomicU64::new(0) };
+    /// The time limit as set, in milliseconds (for messages).
+    static LIMIT_MS: AtomicU64 = const { AtomicU64::new(0) };
+    static MEMORY_LIMIT: AtomicU64 = const { AtomicU64::new(DEFAULT_MEMORY_LIMIT) };
+}
 
 fn epoch() -> Instant {
     static EPOCH: OnceLock<Instant> = OnceLock::new();
@@ -32,10 +38,9 @@ impl std::fmt::Display for Stop {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Stop::Interrupted => write!(f, "interrupted (Ctrl-C)"),
-            Stop::TimeLimit(s) => write!(
-                f,
-                "time limit {s} s reached (raise it with --time-limit)"
-            ),
+            Stop::TimeLimit(s) => {
+                write!(f, "time limit {s} s reached (raise it with --time-limit)")
+            }
         }
     }
 }
@@ -47,16 +52,17 @@ pub fn start(limit: Option<Duration>) {
         Some(d) => {
             let at = (Instant::now() + d).saturating_duration_since(epoch());
             let ns = u64::try_from(at.as_nanos()).unwrap_or(u64::MAX - 1);
-            LIMIT_MS.store(d.as_millis().min(u64::MAX as u128) as u64, Ordering::SeqCst);
-            DEADLINE_NS.store(ns.saturating_add(1), Ordering::SeqCst);
+            LIMIT_MS
+                .with(|l| l.store(d.as_millis().min(u64::MAX as u128) as u64, Ordering::SeqCst));
+            DEADLINE_NS.with(|l| l.store(ns.saturating_add(1), Ordering::SeqCst));
         }
-        None => DEADLINE_NS.store(0, Ordering::SeqCst),
+        None => DEADLINE_NS.with(|l| l.store(0, Ordering::SeqCst)),
     }
 }
 
 /// Removes the deadline (the cancel flag stays as it is).
 pub fn clear() {
-    DEADLINE_NS.store(0, Ordering::SeqCst);
+    DEADLINE_NS.with(|l| l.store(0, Ordering::SeqCst));
 }
 
 /// Asks running work to stop at its next [`check`] (Ctrl-C handler).
@@ -74,10 +80,10 @@ pub fn check() -> Result<(), Stop> {
     if CANCELLED.load(Ordering::Relaxed) {
         return Err(Stop::Interrupted);
     }
-    let d = DEADLINE_NS.load(Ordering::Relaxed);
+    let d = DEADLINE_NS.with(|l| l.load(Ordering::Relaxed));
     if d != 0 && epoch().elapsed().as_nanos() as u64 >= d - 1 {
         return Err(Stop::TimeLimit(
-            LIMIT_MS.load(Ordering::Relaxed) as f64 / 1000.0,
+            LIMIT_MS.with(|l| l.load(Ordering::Relaxed)) as f64 / 1000.0,
         ));
     }
     Ok(())
@@ -85,16 +91,15 @@ pub fn check() -> Result<(), Stop> {
 
 /// Default memory limit of one request (scene, run, signal): 8 GiB.
 pub const DEFAULT_MEMORY_LIMIT: u64 = 8 << 30;
-static MEMORY_LIMIT: AtomicU64 = AtomicU64::new(DEFAULT_MEMORY_LIMIT);
 
-/// Sets the memory limit (bytes) that [`check_memory`] compares estimates against.
+/// Sets the memory limit (bytes, on this thread) that [`check_memory`] compares estimates against.
 pub fn set_memory_limit(bytes: u64) {
-    MEMORY_LIMIT.store(bytes.max(1), Ordering::SeqCst);
+    MEMORY_LIMIT.with(|l| l.store(bytes.max(1), Ordering::SeqCst));
 }
 
-/// The memory limit in bytes.
+/// The memory limit in bytes (on this thread).
 pub fn memory_limit() -> u64 {
-    MEMORY_LIMIT.load(Ordering::Relaxed)
+    MEMORY_LIMIT.with(|l| l.load(Ordering::Relaxed))
 }
 
 /// Bytes as `12.3 GiB` (binary prefixes; enormous estimates in scientific notation).

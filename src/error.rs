@@ -25,7 +25,7 @@ pub enum Error {
     #[error("mesh: {0}")]
     Mesh(String),
     /// The requested explicit time step exceeds the stability limit.
-    #[error("time step dt = {dt_s:.4e} s exceeds the explicit stability limit dt_crit = {dt_crit_s:.4e} s (dt/dt_crit = {ratio:.3}); lower dt or force the run")]
+    #[error("time step dt_s = {dt_s:.4e} s exceeds the explicit stability limit dt_crit = {dt_crit_s:.4e} s (dt/dt_crit = {ratio:.3}); lower dt or force the run")]
     StepTooLarge {
         /// Requested step.
         dt_s: f64,

@@ -128,8 +128,12 @@ impl OutputRoot {
         path.strip_prefix(&self.path)
             .ok()
             .filter(|rel| {
-                rel.components()
-                    .all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir))
+                rel.components().all(|c| {
+                    matches!(
+                        c,
+                        std::path::Component::Normal(_) | std::path::Component::CurDir
+                    )
+                })
             })
             .ok_or_else(|| OutputError::Outside {
                 path: path.to_path_buf(),
@@ -163,7 +167,9 @@ impl OutputRoot {
                 OutputError::io(op, at, e)
             }
         };
-        let name = rel.file_name().ok_or_else(|| OutputError::data(path, "no file name"))?;
+        let name = rel
+            .file_name()
+            .ok_or_else(|| OutputError::data(path, "no file name"))?;
         let parent = rel.parent().filter(|p| !p.as_os_str().is_empty());
         let dir = match parent {
             Some(p) => {
@@ -182,9 +188,11 @@ impl OutputRoot {
         };
         remove_stale_temps(
             || {
-                dir.entries().ok().into_iter().flatten().filter_map(|e| {
-                    e.ok().map(|e| e.file_name().to_string_lossy().into_owned())
-                })
+                dir.entries()
+                    .ok()
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
             },
             Path::new(name),
             |stale| {
@@ -291,12 +299,18 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     }
     ensure_parent_dir(path)?;
     if let Some(dir) = path.parent() {
-        let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+        let dir = if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        };
         remove_stale_temps(
             || {
-                fs::read_dir(dir).ok().into_iter().flatten().filter_map(|e| {
-                    e.ok().map(|e| e.file_name().to_string_lossy().into_owned())
-                })
+                fs::read_dir(dir)
+                    .ok()
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
             },
             path,
             |stale| {

@@ -391,8 +391,32 @@ fn check_values(
             });
         }
     }
+    // Ranges that overflow once padded, or log ranges of hundreds of decades, make the axis
+    // code spin or assert: refuse them with the values that cause it.
+    let (lo, hi) = min_max(values.iter().copied());
+    if !values.is_empty() && (lo.abs() > MAX_AXIS_VALUE || hi.abs() > MAX_AXIS_VALUE) {
+        return Err(invalid(
+            path,
+            format!(
+                "{what}: {axis} values from {lo:e} to {hi:e} exceed the plottable magnitude {MAX_AXIS_VALUE:e}"
+            ),
+        ));
+    }
+    if scale == Scale::Log10 && !values.is_empty() && (hi / lo).log10() > MAX_LOG_DECADES {
+        return Err(invalid(
+            path,
+            format!(
+                "{what}: {axis} values from {lo:e} to {hi:e} span more than {MAX_LOG_DECADES} decades on a log axis"
+            ),
+        ));
+    }
     Ok(())
 }
+
+/// Largest magnitude a plotted value may have (padding the range must not overflow).
+const MAX_AXIS_VALUE: f64 = 1e300;
+/// Most decades a log axis may span.
+const MAX_LOG_DECADES: f64 = 100.0;
 
 /// Checks one series: equal non-zero lengths, finite values, positive on log axes.
 fn check_series(path: &Path, s: &Series, xs: Scale, ys: Scale) -> Result<(), PlotError> {

@@ -464,11 +464,18 @@ impl Scene {
     /// B * the raw receiver quantity (see [`crate::transducer`]).
     pub fn transmit(&self, drive: &Signal, config: &RunConfig) -> Result<RunOutput> {
         require_positive("duration_s", config.duration_s)?;
+        if let Some(d) = config.dt_s {
+            require_positive("dt_s", d)?;
+        }
         let dt = config.dt_s.unwrap_or(self.default_dt_s());
         let samples = config.duration_s / dt;
+        let (field, value) = match config.dt_s {
+            Some(d) if d < 1e-12 => ("dt_s", d),
+            _ => ("duration_s", config.duration_s),
+        };
         crate::budget::check_memory(
-            "duration_s",
-            format!("{} s ({samples:.3e} steps of {dt:.3e} s)", config.duration_s),
+            field,
+            format!("{value} s ({samples:.3e} steps of {dt:.3e} s)"),
             8.0 * samples * (self.receivers.len() as f64 + 4.0),
             "shorten the run",
         )?;
@@ -493,7 +500,10 @@ impl Scene {
         let drive_max = traction.max_abs();
         if drive_max > 0.0
             && out.report.source_work_j == 0.0
-            && out.traces.iter().all(|t| t.samples.iter().all(|&v| v == 0.0))
+            && out
+                .traces
+                .iter()
+                .all(|t| t.samples.iter().all(|&v| v == 0.0))
         {
             return Err(Error::invalid(
                 "drive signal (amplitude)",
@@ -532,10 +542,17 @@ fn check_mesh_size(spec: &SceneSpec, laminate: &Laminate) -> Result<()> {
         ));
     }
     let interfaces = laminate.interfaces_m();
-    if let Some(k) = interfaces.windows(2).position(|w| !(w[1] > w[0]) || !w[1].is_finite()) {
+    if let Some(k) = interfaces
+        .windows(2)
+        .position(|w| !(w[1] > w[0]) || !w[1].is_finite())
+    {
         return Err(Error::invalid(
             "laminate",
-            format!("layer {} of thickness {:e} m", k + 1, laminate.layers[k].thickness_m),
+            format!(
+                "layer {} of thickness {:e} m",
+                k + 1,
+                laminate.layers[k].thickness_m
+            ),
             format!(
                 "a layer vanishes in floating point next to a total thickness of {:e} m \
                  (check laminate.min_epoxy_m and the layer thicknesses)",

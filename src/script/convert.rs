@@ -93,12 +93,7 @@ pub fn strings(ctx: &NativeCallContext, value: &Array, what: &str) -> ScriptResu
 
 /// Converts a script value to JSON (integers stay integers, floats stay floats). Strict: a
 /// NaN or infinite float, or a value of a type JSON cannot hold, is an error naming where
-/// it is (`what.field[i]`) and the value, never a silent `null`.
-pub fn to_json(ctx: &NativeCallContext, value: &Dynamic) -> ScriptResult<serde_json::Value> {
-    strict_json(value, "value").map_err(|m| error(ctx, m))
-}
-
-/// [`to_json`] with `path` naming the value in messages.
+/// it is (`path.field[i]`) and the value, never a silent `null`.
 pub fn strict_json(value: &Dynamic, path: &str) -> Result<serde_json::Value, String> {
     use serde_json::Value;
     if value.is_unit() {
@@ -154,7 +149,10 @@ fn check_echo(
     let short = |v: &Value| {
         let t = v.to_string();
         if t.len() > 60 {
-            format!("{}...", &t[..t.char_indices().nth(57).map_or(t.len(), |(i, _)| i)])
+            format!(
+                "{}...",
+                &t[..t.char_indices().nth(57).map_or(t.len(), |(i, _)| i)]
+            )
         } else {
             t
         }
@@ -190,11 +188,16 @@ fn check_echo(
             .enumerate()
             .try_for_each(|(n, (a, b))| check_echo(a, b, &format!("{path}[{n}]"))),
         (Value::Number(a), Value::Number(b)) => {
-            let (a, b) = (a.as_f64().unwrap_or(f64::NAN), b.as_f64().unwrap_or(f64::NAN));
+            let (a, b) = (
+                a.as_f64().unwrap_or(f64::NAN),
+                b.as_f64().unwrap_or(f64::NAN),
+            );
             if a == b {
                 Ok(())
             } else {
-                Err(format!("{path} = {a}: cannot be represented here (read as {b})"))
+                Err(format!(
+                    "{path} = {a}: cannot be represented here (read as {b})"
+                ))
             }
         }
         (Value::Null, _) | (Value::String(_), _) | (Value::Bool(_), Value::Bool(_)) => Ok(()),

@@ -5,15 +5,13 @@
 
 use rhai::Position;
 use std::cell::Cell;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Mutex, Once};
 
 thread_local! {
     static LAST: Cell<Position> = const { Cell::new(Position::NONE) };
+    /// Guarded script runs on this thread (a panic here is then recorded, not printed).
+    static GUARDED: Cell<usize> = const { Cell::new(0) };
 }
-
-/// Scripts running in guarded mode (panics are then recorded, not printed).
-static GUARDED: AtomicUsize = AtomicUsize::new(0);
 static LOCATION: Mutex<Option<String>> = Mutex::new(None);
 
 /// Records `pos` as the script position last reached on this thread.
@@ -44,9 +42,11 @@ pub fn reset() {
     HOOK.call_once(|| {
         let previous = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
-            if GUARDED.load(Ordering::SeqCst) > 0 {
+            if GUARDED.with(Cell::get) > 0 {
                 if let Ok(mut l) = LOCATION.lock() {
-                    *l = info.location().map(|l| format!("{}:{}", l.file(), l.line()));
+                    *l = info
+                        .location()
+                        .map(|l| format!("{}:{}", l.file(), l.line()));
                 }
             } else {
                 previous(info);
@@ -61,13 +61,13 @@ pub struct Guarded;
 impl Guarded {
     /// Starts a guarded run.
     pub fn start() -> Guarded {
-        GUARDED.fetch_add(1, Ordering::SeqCst);
+        GUARDED.with(|g| g.set(g.get() + 1));
         Guarded
     }
 }
 
 impl Drop for Guarded {
     fn drop(&mut self) {
-        GUARDED.fetch_sub(1, Ordering::SeqCst);
+        GUARDED.with(|g| g.set(g.get().saturating_sub(1)));
     }
 }

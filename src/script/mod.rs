@@ -256,6 +256,7 @@ pub struct Host {
     context: Arc<HostContext>,
     max_operations: u64,
     time_limit: Option<Duration>,
+    max_memory: u64,
 }
 
 impl Host {
@@ -274,7 +275,10 @@ impl Host {
         if let Some(t) = options.time_limit.filter(|t| t.is_zero()) {
             return Err(ScriptError::new(
                 "--time-limit",
-                format!("{} s is not a limit; give a positive number of seconds", t.as_secs_f64()),
+                format!(
+                    "{} s is not a limit; give a positive number of seconds",
+                    t.as_secs_f64()
+                ),
             ));
         }
         if options.max_memory == 0 {
@@ -283,10 +287,9 @@ impl Host {
                 "0 is not a limit; give a positive size",
             ));
         }
-        crate::budget::set_memory_limit(options.max_memory);
-        let root = crate::io::OutputRoot::open(&options.out_dir).map_err(|e| {
-            ScriptError::new(options.out_dir.display().to_string(), e.to_string())
-        })?;
+
+        let root = crate::io::OutputRoot::open(&options.out_dir)
+            .map_err(|e| ScriptError::new(options.out_dir.display().to_string(), e.to_string()))?;
         crate::solve::show_progress(!options.quiet);
         let context = Arc::new(HostContext {
             out_dir: options.out_dir,
@@ -302,6 +305,7 @@ impl Host {
             context,
             max_operations: options.max_operations,
             time_limit: options.time_limit,
+            max_memory: options.max_memory,
         })
     }
 
@@ -328,6 +332,7 @@ impl Host {
         let mut scope = self.scope();
         self.context.start(name);
         crate::budget::start(self.time_limit);
+        crate::budget::set_memory_limit(self.max_memory);
         let result = self.guarded(name, || {
             let mut run = || self.engine.run_ast_with_scope(&mut scope, &ast);
             match &self.context.root {

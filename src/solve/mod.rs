@@ -310,7 +310,11 @@ fn run_steps(
     let per_step = 8.0
         * (sources as f64
             + receivers as f64
-            + if config.record_crack { 2.0 * crack_pairs } else { 0.0 }
+            + if config.record_crack {
+                2.0 * crack_pairs
+            } else {
+                0.0
+            }
             + if config.contact.is_some() { 3.0 } else { 0.0 });
     let ledger = 8.0 * 9.0 * steps / config.ledger_every.max(1) as f64;
     let snapshots = match (config.snapshot_every, &config.snapshot_dir) {
@@ -319,11 +323,8 @@ fn run_steps(
     };
     let bytes = per_step * steps + ledger + snapshots;
     let (field, value) = match config.dt_s {
-        Some(d) if config.duration_s / d < 1e9 || snapshots > per_step * steps => {
-            ("duration_s", format!("{} s", config.duration_s))
-        }
-        Some(d) => ("dt_s", format!("{d} s")),
-        None => ("duration_s", format!("{} s", config.duration_s)),
+        Some(d) if d < 1e-12 => ("dt_s", format!("{d} s")),
+        _ => ("duration_s", format!("{} s", config.duration_s)),
     };
     crate::budget::check_memory(
         field,
