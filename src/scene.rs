@@ -722,7 +722,7 @@ fn crack_geometry(spec: &SceneSpec, c: &CrackSpec, height: f64) -> Result<(f64, 
             "crack",
             format!("x {x0:.4e}..{x1:.4e} m at depth {:.4e} m", c.depth_m),
             format!(
-                "must lie inside the {:.4e} x {height:.4e} m region",
+                "must lie inside the {:.4e} x {height:.4e} m region (width_m x laminate thickness; check crack.x_center_m, crack.length_m, crack.depth_m)",
                 spec.width_m
             ),
         ));
