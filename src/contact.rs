@@ -180,11 +180,11 @@ impl ContactSolver {
                     "must be finite and > 0",
                 ));
             }
-            if max_iterations == 0 {
+            if max_iterations == 0 || max_iterations > MAX_AL_ITERATIONS {
                 return Err(Error::invalid(
                     "contact.max_iterations",
-                    0,
-                    "must be at least 1",
+                    max_iterations,
+                    format!("must be in 1..={MAX_AL_ITERATIONS} (iterations per step)"),
                 ));
             }
         }
@@ -305,6 +305,7 @@ impl ContactSolver {
 
     /// lambda_N <- max(0, lambda_N + b g_N(lambda)) until the constraint residual (the
     /// penetration, and the opening of pairs still carrying force) has L2 norm < tolerance.
+    #[allow(clippy::too_many_lines)]
     fn augmented_lagrangian(
         &mut self,
         scale: f64,
@@ -405,3 +406,7 @@ impl ContactSolver {
         (self.report, series)
     }
 }
+
+/// Most augmented-Lagrangian iterations a step may take (the iteration converges in a few
+/// at the optimal penalty; a larger cap only turns a diverging setup into a hang).
+pub const MAX_AL_ITERATIONS: usize = 10_000;

@@ -25,7 +25,7 @@ pub enum Error {
     #[error("mesh: {0}")]
     Mesh(String),
     /// The requested explicit time step exceeds the stability limit.
-    #[error("time step dt = {dt_s:.4e} s exceeds the explicit stability limit dt_crit = {dt_crit_s:.4e} s (dt/dt_crit = {ratio:.3}); lower dt or force the run")]
+    #[error("time step dt_s = {dt_s:.4e} s exceeds the explicit stability limit dt_crit = {dt_crit_s:.4e} s (dt/dt_crit = {ratio:.3}); lower dt or force the run")]
     StepTooLarge {
         /// Requested step.
         dt_s: f64,
@@ -51,6 +51,26 @@ pub enum Error {
     /// The contact algorithm failed (for example an augmented-Lagrangian penalty above its stable bound).
     #[error("contact: {0}")]
     Contact(String),
+    /// Work stopped by the time limit or Ctrl-C (see [`crate::budget`]).
+    #[error("stopped: {0}")]
+    Stopped(crate::budget::Stop),
+    /// The estimated memory of a request exceeds the limit (see [`crate::scene::memory_limit`]).
+    #[error("{field} = {value} would need about {estimate} of memory, above the limit of {limit} (set with --max-memory); {hint}")]
+    TooLarge {
+        /// The field the user wrote.
+        field: String,
+        /// Its value.
+        value: String,
+        /// The estimate, formatted (e.g. "12.3 GiB").
+        estimate: String,
+        /// The limit, formatted.
+        limit: String,
+        /// What to change.
+        hint: String,
+    },
+    /// An error already worded in the user's field names (e.g. a TR-NEWS spec's).
+    #[error("{0}")]
+    Named(String),
     /// Signal processing error.
     #[error(transparent)]
     Signal(#[from] crate::signal::SignalError),
@@ -60,6 +80,12 @@ pub enum Error {
     /// Rendering a figure failed.
     #[error(transparent)]
     Plot(#[from] crate::plot::PlotError),
+}
+
+impl From<crate::budget::Stop> for Error {
+    fn from(s: crate::budget::Stop) -> Self {
+        Error::Stopped(s)
+    }
 }
 
 /// Library result type.

@@ -10,6 +10,7 @@ use std::fs;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
 /// Failure to write an output file; every variant names the path and the cause.
 #[derive(Debug, thiserror::Error)]
@@ -31,6 +32,14 @@ pub enum OutputError {
         path: PathBuf,
         /// What is wrong with the data.
         message: String,
+    },
+    /// The path leads out of the active output root (given outside it, or through a symlink).
+    #[error("output path {path} leads outside the output directory {root} (through a symlink, or not under it); refused", path = .path.display(), root = .root.display())]
+    Outside {
+        /// The path as given.
+        path: PathBuf,
+        /// The output root.
+        root: PathBuf,
     },
     /// Serialising to JSON failed.
     #[error("cannot write {path}: JSON serialisation failed: {source}", path = .path.display())]
@@ -71,22 +80,200 @@ pub fn ensure_parent_dir(path: &Path) -> Result<(), OutputError> {
     }
 }
 
+/// An output directory opened once. Writes through it are resolved beneath it by cap-std's
+/// openat-style lookups (every component, symlinks included, is followed relative to the open
+/// directory handle), so a symlink that leads out of it is refused at the moment of use: no
+/// check-then-use race, even when a link is swapped while a script runs.
+#[derive(Clone, Debug)]
+pub struct OutputRoot {
+    dir: Arc<cap_std::fs::Dir>,
+    path: PathBuf,
+}
+
+impl OutputRoot {
+    /// Creates `path` if missing and opens it as the root of every write made within it.
+    pub fn open(path: &Path) -> Result<OutputRoot, OutputError> {
+        fs::create_dir_all(path).map_err(|e| OutputError::io("create directory", path, e))?;
+        let dir = cap_std::fs::Dir::open_ambient_dir(path, cap_std::ambient_authority())
+            .map_err(|e| OutputError::io("open output directory", path, e))?;
+        Ok(OutputRoot {
+            dir: Arc::new(dir),
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// The directory as given when opened.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Runs `f` with this root active on the current thread: every path a writer of this
+    /// crate is given must then lie under [`OutputRoot::path`] and is written beneath the open
+    /// directory (see [`write_atomic`]). The previous root is restored afterwards, also on panic.
+    pub fn within<T>(&self, f: impl FnOnce() -> T) -> T {
+        struct Restore(Option<OutputRoot>);
+        impl Drop for Restore {
+            fn drop(&mut self) {
+                let old = self.0.take();
+                ACTIVE_ROOT.with(|r| *r.borrow_mut() = old);
+            }
+        }
+        let old = ACTIVE_ROOT.with(|r| r.borrow_mut().replace(self.clone()));
+        let _restore = Restore(old);
+        f()
+    }
+
+    /// `path` relative to the root, or an error when it does not lie under it.
+    fn relative<'a>(&self, path: &'a Path) -> Result<&'a Path, OutputError> {
+        path.strip_prefix(&self.path)
+            .ok()
+            .filter(|rel| {
+                rel.components().all(|c| {
+                    matches!(
+                        c,
+                        std::path::Component::Normal(_) | std::path::Component::CurDir
+                    )
+                })
+            })
+            .ok_or_else(|| OutputError::Outside {
+                path: path.to_path_buf(),
+                root: self.path.clone(),
+            })
+    }
+
+    /// True when the longest existing prefix of `rel` resolves (symlinks followed) outside the
+    /// root. Used only to word an error that cap-std already raised; the refusal itself does
+    /// not depend on this check.
+    fn leads_outside(&self, rel: &Path) -> bool {
+        let Ok(root) = fs::canonicalize(&self.path) else {
+            return false;
+        };
+        rel.ancestors()
+            .filter(|a| !a.as_os_str().is_empty())
+            .find_map(|a| fs::canonicalize(self.path.join(a)).ok())
+            .is_some_and(|real| !real.starts_with(&root))
+    }
+
+    /// Writes `bytes` to `path` (under the root) atomically, beneath the open directory.
+    fn write_atomic(&self, path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+        let rel = self.relative(path)?;
+        let escape = |e: std::io::Error, op: &'static str, at: &Path| {
+            if e.to_string().contains("outside of the filesystem") || self.leads_outside(rel) {
+                OutputError::Outside {
+                    path: path.to_path_buf(),
+                    root: self.path.clone(),
+                }
+            } else {
+                OutputError::io(op, at, e)
+            }
+        };
+        let name = rel
+            .file_name()
+            .ok_or_else(|| OutputError::data(path, "no file name"))?;
+        let parent = rel.parent().filter(|p| !p.as_os_str().is_empty());
+        let dir = match parent {
+            Some(p) => {
+                let full = self.path.join(p);
+                self.dir
+                    .create_dir_all(p)
+                    .map_err(|e| escape(e, "create directory", &full))?;
+                self.dir
+                    .open_dir(p)
+                    .map_err(|e| escape(e, "open directory", &full))?
+            }
+            None => self
+                .dir
+                .try_clone()
+                .map_err(|e| escape(e, "open directory", &self.path))?,
+        };
+        remove_stale_temps(
+            || {
+                dir.entries()
+                    .ok()
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
+            },
+            Path::new(name),
+            |stale| {
+                let _ = dir.remove_file(stale);
+            },
+        );
+        let tmp = temp_sibling(Path::new(name));
+        let written = dir.create(&tmp).and_then(|mut f| f.write_all(bytes));
+        if let Err(e) = written {
+            let _ = dir.remove_file(&tmp);
+            return Err(escape(e, "write", path));
+        }
+        dir.rename(&tmp, &dir, name).map_err(|e| {
+            let _ = dir.remove_file(&tmp);
+            escape(e, "rename temporary file onto", path)
+        })
+    }
+}
+
+thread_local! {
+    /// The output root active on this thread (see [`OutputRoot::within`]).
+    static ACTIVE_ROOT: std::cell::RefCell<Option<OutputRoot>> = const { std::cell::RefCell::new(None) };
+}
+
+/// The output root active on this thread, if any.
+pub fn active_root() -> Option<OutputRoot> {
+    ACTIVE_ROOT.with(|r| r.borrow().clone())
+}
+
 /// A unique temporary sibling of `path` that keeps its extension:
-/// `dir/.name.tmp-<pid>-<counter>.ext`. Backends that pick the encoder from the
-/// extension (plotters' PNG writer) therefore work on it unchanged.
+/// `dir/.name.tmp-<pid>-<counter>.ext`.
 pub fn temp_sibling(path: &Path) -> PathBuf {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let (prefix, ext) = temp_parts(path);
+    path.with_file_name(format!("{prefix}{}-{n}{ext}", std::process::id()))
+}
+
+/// The parts of a temporary name around `<pid>-<counter>`: `.stem.tmp-` and `.ext` (or "").
+fn temp_parts(path: &Path) -> (String, String) {
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy())
         .unwrap_or_default();
-    let mut name = format!(".{stem}.tmp-{}-{n}", std::process::id());
-    if let Some(ext) = path.extension() {
-        name.push('.');
-        name.push_str(&ext.to_string_lossy());
+    let ext = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    (format!(".{stem}.tmp-"), ext)
+}
+
+/// Removes the temporary siblings of `target` left by writers that no longer run (a killed
+/// process): names `.stem.tmp-<pid>-<n>.ext` whose pid is not ours and has no `/proc` entry.
+/// Only on Linux, where a dead pid can be told from a live one; elsewhere they are ignored
+/// (hidden names, never read).
+fn remove_stale_temps<I: Iterator<Item = String>>(
+    names: impl FnOnce() -> I,
+    target: &Path,
+    mut remove: impl FnMut(&str),
+) {
+    if !cfg!(target_os = "linux") {
+        return;
     }
-    path.with_file_name(name)
+    let (prefix, ext) = temp_parts(target);
+    for name in names() {
+        let Some(middle) = name
+            .strip_prefix(&prefix)
+            .and_then(|m| m.strip_suffix(&ext))
+        else {
+            continue;
+        };
+        let Some((pid, n)) = middle.split_once('-') else {
+            continue;
+        };
+        let (Ok(pid), true) = (pid.parse::<u32>(), n.bytes().all(|b| b.is_ascii_digit())) else {
+            continue;
+        };
+        if pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists() {
+            remove(&name);
+        }
+    }
 }
 
 /// Renames the finished temporary file `tmp` over `path`; removes `tmp` if that fails.
@@ -100,9 +287,37 @@ pub fn commit_temp(tmp: &Path, path: &Path) -> Result<(), OutputError> {
 /// Writes `bytes` to `path` atomically: parent directories are created, the bytes go to
 /// a temporary file in the same directory, which is then renamed over the target
 /// (replacing an existing file). No fsync is done: outputs favour speed over
-/// durability across a power cut, but are never seen half-written.
+/// durability across a power cut, but are never seen half-written. Temporary files of
+/// the same target left by a killed writer are removed first.
+///
+/// While an [`OutputRoot`] is active on this thread ([`OutputRoot::within`]), `path` must lie
+/// under it and the write goes through the root's open directory: a symlink leading out of
+/// it, or a path outside it, is refused with [`OutputError::Outside`].
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    if let Some(root) = active_root() {
+        return root.write_atomic(path, bytes);
+    }
     ensure_parent_dir(path)?;
+    if let Some(dir) = path.parent() {
+        let dir = if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        };
+        remove_stale_temps(
+            || {
+                fs::read_dir(dir)
+                    .ok()
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
+            },
+            path,
+            |stale| {
+                let _ = fs::remove_file(dir.join(stale));
+            },
+        );
+    }
     let tmp = temp_sibling(path);
     let written = fs::File::create(&tmp).and_then(|mut f| f.write_all(bytes));
     if let Err(e) = written {

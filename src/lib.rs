@@ -6,6 +6,7 @@
 //! [`trnews`] -> [`plot`] / [`io`]. [`scene`] describes a whole experiment setup.
 
 pub mod accuracy;
+pub mod budget;
 pub mod contact;
 pub mod error;
 pub mod fem;

@@ -3,7 +3,7 @@
 use clap::Parser;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 use trnews::script::{parse_param_value, Host, HostOptions, ScriptError, DEFAULT_MAX_OPERATIONS};
 
 /// Run a trnews experiment script (Rhai): simulations, TR-NEWS processing, figures and data files.
@@ -28,6 +28,12 @@ struct Cli {
     /// Operation budget of the script; exceeding it stops the run with an error.
     #[arg(long, default_value_t = DEFAULT_MAX_OPERATIONS)]
     max_operations: u64,
+    /// Wall-clock limit of the run in seconds, native work included (default: none).
+    #[arg(long, value_name = "SECONDS")]
+    time_limit: Option<f64>,
+    /// Memory limit of one scene, run or signal, in GiB: larger requests are refused before allocating.
+    #[arg(long, value_name = "GIB", default_value_t = 8.0)]
+    max_memory: f64,
     /// Only compile the script and report syntax errors.
     #[arg(long)]
     check: bool,
@@ -61,6 +67,30 @@ fn run(cli: &Cli) -> Result<(), ScriptError> {
             .build_global()
             .map_err(|e| ScriptError::new("--threads", e.to_string()))?;
     }
+    let time_limit = match cli.time_limit {
+        Some(s) if s.is_finite() && s > 0.0 => Some(Duration::from_secs_f64(s.min(1e9))),
+        Some(s) => {
+            return Err(ScriptError::new(
+                "--time-limit",
+                format!("{s} is not a positive number of seconds"),
+            ))
+        }
+        None => None,
+    };
+    if !(cli.max_memory.is_finite() && cli.max_memory > 0.0) {
+        return Err(ScriptError::new(
+            "--max-memory",
+            format!("{} is not a positive number of GiB", cli.max_memory),
+        ));
+    }
+    // Ctrl-C asks the running script and its native work to stop at the next check; a
+    // second Ctrl-C ends the process at once.
+    let _ = ctrlc::set_handler(|| {
+        if trnews::budget::cancelled() {
+            std::process::exit(130);
+        }
+        trnews::budget::cancel();
+    });
     let host = Host::new(HostOptions {
         out_dir: cli.out.clone(),
         params: cli
@@ -70,6 +100,8 @@ fn run(cli: &Cli) -> Result<(), ScriptError> {
             .collect(),
         max_operations: cli.max_operations,
         quiet: cli.quiet,
+        time_limit,
+        max_memory: (cli.max_memory * (1u64 << 30) as f64).min(u64::MAX as f64) as u64,
     })?;
     if cli.api {
         print_api(&host);

@@ -6,7 +6,7 @@
 //! system fonts. Bad data (empty or non-finite series, non-positive values on a log
 //! axis, inconsistent shapes) is reported as a [`PlotError`], never a panic.
 
-use crate::io::{commit_temp, ensure_parent_dir, temp_sibling, OutputError};
+use crate::io::OutputError;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
@@ -391,8 +391,32 @@ fn check_values(
             });
         }
     }
+    // Ranges that overflow once padded, or log ranges of hundreds of decades, make the axis
+    // code spin or assert: refuse them with the values that cause it.
+    let (lo, hi) = min_max(values.iter().copied());
+    if !values.is_empty() && (lo.abs() > MAX_AXIS_VALUE || hi.abs() > MAX_AXIS_VALUE) {
+        return Err(invalid(
+            path,
+            format!(
+                "{what}: {axis} values from {lo:e} to {hi:e} exceed the plottable magnitude {MAX_AXIS_VALUE:e}"
+            ),
+        ));
+    }
+    if scale == Scale::Log10 && !values.is_empty() && (hi / lo).log10() > MAX_LOG_DECADES {
+        return Err(invalid(
+            path,
+            format!(
+                "{what}: {axis} values from {lo:e} to {hi:e} span more than {MAX_LOG_DECADES} decades on a log axis"
+            ),
+        ));
+    }
     Ok(())
 }
+
+/// Largest magnitude a plotted value may have (padding the range must not overflow).
+const MAX_AXIS_VALUE: f64 = 1e300;
+/// Most decades a log axis may span.
+const MAX_LOG_DECADES: f64 = 100.0;
 
 /// Checks one series: equal non-zero lengths, finite values, positive on log axes.
 fn check_series(path: &Path, s: &Series, xs: Scale, ys: Scale) -> Result<(), PlotError> {
@@ -559,28 +583,52 @@ fn paint<DB: DrawingBackend>(
     root.present().map_err(draw_err)
 }
 
-/// Renders `fig` into `tmp` with the backend for `format`.
-fn render_file(tmp: &Path, format: Format, fig: &impl Figure) -> Result<(), String> {
+/// Renders `fig` in memory with the backend for `format`; returns the file's bytes.
+/// (In memory so that the file itself goes through [`crate::io::write_atomic`], the one
+/// place that writes, and stays inside an active output root.)
+fn render_bytes(format: Format, fig: &impl Figure) -> Result<Vec<u8>, String> {
+    let (w, h) = fig.size();
     match format {
-        Format::Png => paint(BitMapBackend::new(tmp, fig.size()).into_drawing_area(), fig),
-        Format::Svg => paint(SVGBackend::new(tmp, fig.size()).into_drawing_area(), fig),
+        Format::Png => {
+            let len = (w as usize)
+                .checked_mul(h as usize)
+                .and_then(|n| n.checked_mul(3))
+                .ok_or_else(|| format!("image size {w} x {h} is too large"))?;
+            let mut rgb = vec![0u8; len];
+            paint(
+                BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area(),
+                fig,
+            )?;
+            let mut bytes = Vec::new();
+            let mut encoder = png::Encoder::new(&mut bytes, w, h);
+            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_depth(png::BitDepth::Eight);
+            encoder
+                .write_header()
+                .and_then(|mut writer| writer.write_image_data(&rgb))
+                .map_err(|e| format!("PNG encoding failed: {e}"))?;
+            Ok(bytes)
+        }
+        Format::Svg => {
+            let mut text = String::new();
+            paint(
+                SVGBackend::with_string(&mut text, (w, h)).into_drawing_area(),
+                fig,
+            )?;
+            Ok(text.into_bytes())
+        }
     }
 }
 
-/// Renders `fig` to `path` atomically: temporary sibling with the same extension, then rename.
+/// Renders `fig` to `path` atomically (see [`crate::io::write_atomic`]).
 fn render(path: &Path, fig: &impl Figure) -> Result<(), PlotError> {
     let format = format_of(path)?;
     ensure_font(path)?;
-    ensure_parent_dir(path)?;
-    let tmp = temp_sibling(path);
-    if let Err(message) = render_file(&tmp, format, fig) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(PlotError::Draw {
-            path: path.to_path_buf(),
-            message,
-        });
-    }
-    Ok(commit_temp(&tmp, path)?)
+    let bytes = render_bytes(format, fig).map_err(|message| PlotError::Draw {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    Ok(crate::io::write_atomic(path, &bytes)?)
 }
 
 /// Draws the figure title at the top of `root`; returns the area below it.

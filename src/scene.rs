@@ -374,6 +374,7 @@ impl Scene {
         require_positive("width_m", spec.width_m)?;
         let laminate = build_laminate(&spec.laminate, spec.plane)?;
         let height = laminate.thickness_m();
+        check_mesh_size(spec, &laminate)?;
         let mut mesh = Mesh::layered(
             &laminate,
             spec.width_m,
@@ -396,8 +397,22 @@ impl Scene {
         } else {
             vec![]
         };
+        if !(spec.transmitter.peak_pa.is_finite() && spec.transmitter.peak_pa > 0.0) {
+            return Err(Error::invalid(
+                "transmitter.peak_pa",
+                spec.transmitter.peak_pa,
+                "must be finite and > 0 (the focusing signals are scaled to it)",
+            ));
+        }
         let transmitter = transmitter_weights(&mesh, &spec.transmitter, height, spec.width_m)?;
         let receivers = build_receivers(&mesh, &spec.receivers, height)?;
+        if receivers.is_empty() {
+            return Err(Error::invalid(
+                "receivers.x_m",
+                "[]",
+                "needs at least one receiver position",
+            ));
+        }
         let contact = spec
             .crack
             .as_ref()
@@ -409,6 +424,14 @@ impl Scene {
             Some(p) => split_stability(&model, p, &absorbing)?,
             None => solve::stability::estimate(&model),
         };
+        if !(stability.dt_crit_s.is_finite() && stability.dt_crit_s > 0.0) {
+            return Err(Error::invalid(
+                "laminate (materials)",
+                format!("dt_crit = {} s", stability.dt_crit_s),
+                "the critical time step is not a finite positive number: a density or \
+                 modulus is too small or too large for double precision",
+            ));
+        }
         Ok(Scene {
             spec: spec.clone(),
             laminate,
@@ -440,6 +463,22 @@ impl Scene {
     /// transducers' band when the scene has one: the traction is B * drive and each trace
     /// B * the raw receiver quantity (see [`crate::transducer`]).
     pub fn transmit(&self, drive: &Signal, config: &RunConfig) -> Result<RunOutput> {
+        require_positive("duration_s", config.duration_s)?;
+        if let Some(d) = config.dt_s {
+            require_positive("dt_s", d)?;
+        }
+        let dt = config.dt_s.unwrap_or(self.default_dt_s());
+        let samples = config.duration_s / dt;
+        let (field, value) = match config.dt_s {
+            Some(d) if d < 1e-12 => ("dt_s", d),
+            _ => ("duration_s", config.duration_s),
+        };
+        crate::budget::check_memory(
+            field,
+            format!("{value} s ({samples:.3e} steps of {dt:.3e} s)"),
+            8.0 * samples * (self.receivers.len() as f64 + 4.0),
+            "shorten the run",
+        )?;
         let Some(t) = &self.spec.transducer else {
             return self.apply_traction(drive, config);
         };
@@ -457,13 +496,89 @@ impl Scene {
             weights: self.transmitter.clone(),
             signal: traction.clone(),
         };
-        solve::run(&self.model, &[source], &self.receivers, config)
+        let out = solve::run(&self.model, &[source], &self.receivers, config)?;
+        let drive_max = traction.max_abs();
+        if drive_max > 0.0
+            && out.report.source_work_j == 0.0
+            && out
+                .traces
+                .iter()
+                .all(|t| t.samples.iter().all(|&v| v == 0.0))
+        {
+            return Err(Error::invalid(
+                "drive signal (amplitude)",
+                format!("{drive_max:e} Pa"),
+                "every receiver recorded exactly zero and the source did no work: the input \
+                 underflowed in double precision; use a larger amplitude",
+            ));
+        }
+        Ok(out)
     }
 
     /// The time step runs of this scene use by default (0.9 dt_crit).
     pub fn default_dt_s(&self) -> f64 {
         0.9 * self.stability.dt_crit_s
     }
+}
+
+/// Bytes per mesh node of a built scene and its runs (mesh, block-CSR stiffness, mass,
+/// operator stencils, solver vectors), a generous upper figure from the default scenes.
+const BYTES_PER_NODE: f64 = 1024.0;
+
+/// Refuses, before anything is allocated, a mesh that is degenerate (fewer than two columns,
+/// layers that vanish in floating point) or whose estimated memory exceeds the limit
+/// ([`crate::budget::check_memory`]); the error names the fields the user wrote.
+fn check_mesh_size(spec: &SceneSpec, laminate: &Laminate) -> Result<()> {
+    require_positive("element_size_x_m", spec.element_size_x_m)?;
+    require_positive("element_size_y_m", spec.element_size_y_m)?;
+    if spec.element_size_x_m > 0.5 * spec.width_m {
+        return Err(Error::invalid(
+            "element_size_x_m",
+            format!("{} m", spec.element_size_x_m),
+            format!(
+                "must be at most half of width_m = {} m (the mesh needs at least two columns)",
+                spec.width_m
+            ),
+        ));
+    }
+    let interfaces = laminate.interfaces_m();
+    if let Some(k) = interfaces
+        .windows(2)
+        .position(|w| !(w[1] > w[0]) || !w[1].is_finite())
+    {
+        return Err(Error::invalid(
+            "laminate",
+            format!(
+                "layer {} of thickness {:e} m",
+                k + 1,
+                laminate.layers[k].thickness_m
+            ),
+            format!(
+                "a layer vanishes in floating point next to a total thickness of {:e} m \
+                 (check laminate.min_epoxy_m and the layer thicknesses)",
+                laminate.thickness_m()
+            ),
+        ));
+    }
+    let columns = (spec.width_m / spec.element_size_x_m).ceil().max(1.0);
+    let rows: f64 = interfaces
+        .windows(2)
+        .map(|w| ((w[1] - w[0]) / spec.element_size_y_m).ceil().max(1.0))
+        .sum();
+    let nodes = (columns + 1.0) * (rows + 1.0);
+    crate::budget::check_memory(
+        "element_size_x_m, element_size_y_m",
+        format!(
+            "{} m, {} m over width_m = {} m and a laminate {:e} m thick ({columns:.3e} columns x {rows:.3e} rows, {nodes:.3e} nodes at about {} each)",
+            spec.element_size_x_m,
+            spec.element_size_y_m,
+            spec.width_m,
+            laminate.thickness_m(),
+            crate::budget::format_bytes(BYTES_PER_NODE),
+        ),
+        nodes * BYTES_PER_NODE,
+        "use larger elements or a smaller region",
+    )
 }
 
 /// Where a crack lies on the mesh: the requested geometry and the mesh lines it snapped to
@@ -607,7 +722,7 @@ fn crack_geometry(spec: &SceneSpec, c: &CrackSpec, height: f64) -> Result<(f64, 
             "crack",
             format!("x {x0:.4e}..{x1:.4e} m at depth {:.4e} m", c.depth_m),
             format!(
-                "must lie inside the {:.4e} x {height:.4e} m region",
+                "must lie inside the {:.4e} x {height:.4e} m region (width_m x laminate thickness; check crack.x_center_m, crack.length_m, crack.depth_m)",
                 spec.width_m
             ),
         ));

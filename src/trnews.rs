@@ -437,6 +437,21 @@ fn focus_estimates(
     })
 }
 
+/// `e` with the internal parameter names of the signal and run functions replaced by the
+/// TR-NEWS spec's (`tr_news.<field>`), so that the message names the field the user wrote.
+fn spec_field(e: Error, names: &[(&str, &str)]) -> Error {
+    let mut text = e.to_string();
+    for (internal, field) in names {
+        text = text.replace(internal, &format!("tr_news.{field}"));
+    }
+    match e {
+        Error::InvalidInput { .. } | Error::Signal(_) | Error::TooLarge { .. } => {
+            Error::Named(text)
+        }
+        other => other,
+    }
+}
+
 fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
     let peak_pa = responder.scene.spec.transmitter.peak_pa;
     let chirp = signal::chirp(
@@ -447,8 +462,11 @@ fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
         responder.dt_s,
         peak_pa,
         spec.taper,
-    )?;
-    let first = responder.respond(&chirp, spec.record_s)?;
+    )
+    .map_err(|e| spec_field(e.into(), &[("t1_s", "chirp_s"), ("total_s", "signal_s")]))?;
+    let first = responder
+        .respond(&chirp, spec.record_s)
+        .map_err(|e| spec_field(e, &[("duration_s", "record_s")]))?;
     let n_receivers = first.traces.len();
     let receivers: Vec<usize> = if spec.receivers.is_empty() {
         (1..=n_receivers).collect()
@@ -487,7 +505,9 @@ fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
                 .collect::<std::result::Result<Vec<_>, _>>()?,
         );
     }
-    let responses = responder.respond_all(&transmissions, spec.focus_duration_s())?;
+    let responses = responder
+        .respond_all(&transmissions, spec.focus_duration_s())
+        .map_err(|e| spec_field(e, &[("duration_s", "window_s (its focusing run)")]))?;
     let focus = receivers
         .iter()
         .enumerate()

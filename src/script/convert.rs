@@ -91,9 +91,123 @@ pub fn strings(ctx: &NativeCallContext, value: &Array, what: &str) -> ScriptResu
         .collect()
 }
 
-/// Converts a script value to JSON (integers stay integers, floats stay floats).
-pub fn to_json(ctx: &NativeCallContext, value: &Dynamic) -> ScriptResult<serde_json::Value> {
-    serde_json::to_value(value).at(ctx)
+/// Converts a script value to JSON (integers stay integers, floats stay floats). Strict: a
+/// NaN or infinite float, or a value of a type JSON cannot hold, is an error naming where
+/// it is (`path.field[i]`) and the value, never a silent `null`.
+pub fn strict_json(value: &Dynamic, path: &str) -> Result<serde_json::Value, String> {
+    use serde_json::Value;
+    if value.is_unit() {
+        return Ok(Value::Null);
+    }
+    if let Ok(b) = value.as_bool() {
+        return Ok(Value::Bool(b));
+    }
+    if let Ok(i) = value.as_int() {
+        return Ok(Value::from(i));
+    }
+    if let Ok(f) = value.as_float() {
+        return serde_json::Number::from_f64(f)
+            .map(Value::Number)
+            .ok_or_else(|| format!("{path} = {f}: must be a finite number"));
+    }
+    if let Ok(c) = value.as_char() {
+        return Ok(Value::String(c.to_string()));
+    }
+    if value.is_string() {
+        return Ok(Value::String(value.to_string()));
+    }
+    if let Some(a) = value.read_lock::<Array>() {
+        return a
+            .iter()
+            .enumerate()
+            .map(|(i, v)| strict_json(v, &format!("{path}[{i}]")))
+            .collect::<Result<Vec<_>, _>>()
+            .map(Value::Array);
+    }
+    if let Some(m) = value.read_lock::<Map>() {
+        return m
+            .iter()
+            .map(|(k, v)| Ok((k.to_string(), strict_json(v, &format!("{path}.{k}"))?)))
+            .collect::<Result<serde_json::Map<_, _>, String>>()
+            .map(Value::Object);
+    }
+    Err(format!(
+        "{path} is a {}, which cannot be used here (give numbers, strings, arrays or maps)",
+        value.type_name()
+    ))
+}
+
+/// Checks that deserialising `input` into `output` (re-serialised) used every part of it as
+/// given: an unknown field at any depth, an array read as a map (serde accepts a sequence
+/// for a struct), or a number changed on the way is an error naming the field and the value.
+fn check_echo(
+    input: &serde_json::Value,
+    output: &serde_json::Value,
+    path: &str,
+) -> Result<(), String> {
+    use serde_json::Value;
+    let short = |v: &Value| {
+        let t = v.to_string();
+        if t.len() > 60 {
+            format!(
+                "{}...",
+                &t[..t.char_indices().nth(57).map_or(t.len(), |(i, _)| i)]
+            )
+        } else {
+            t
+        }
+    };
+    let kind = |v: &Value| match v {
+        Value::Null => "nothing (())",
+        Value::Bool(_) => "a bool",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "an array",
+        Value::Object(_) => "a map",
+    };
+    match (input, output) {
+        (Value::Object(i), Value::Object(o)) => {
+            for (k, v) in i {
+                match o.get(k) {
+                    Some(ov) => check_echo(v, ov, &format!("{path}.{k}"))?,
+                    None if v.is_null() => {}
+                    None => {
+                        return Err(format!(
+                            "{path}.{k} = {}: unknown field (the fields here are: {})",
+                            short(v),
+                            o.keys().cloned().collect::<Vec<_>>().join(", ")
+                        ))
+                    }
+                }
+            }
+            Ok(())
+        }
+        (Value::Array(i), Value::Array(o)) if i.len() == o.len() => i
+            .iter()
+            .zip(o)
+            .enumerate()
+            .try_for_each(|(n, (a, b))| check_echo(a, b, &format!("{path}[{n}]"))),
+        (Value::Number(a), Value::Number(b)) => {
+            let (a, b) = (
+                a.as_f64().unwrap_or(f64::NAN),
+                b.as_f64().unwrap_or(f64::NAN),
+            );
+            if a == b {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{path} = {a}: cannot be represented here (read as {b})"
+                ))
+            }
+        }
+        (Value::Null, _) | (Value::String(_), _) | (Value::Bool(_), Value::Bool(_)) => Ok(()),
+        (i, o) => Err(format!(
+            "{path} = {}: {} was given where {} is expected",
+            short(i),
+            kind(i),
+            kind(o)
+        )),
+    }
 }
 
 /// Converts a serialisable library value to a script value (structs become object maps).
@@ -108,14 +222,17 @@ pub fn options<T>(ctx: &NativeCallContext, map: Map, base: &T, what: &str) -> Sc
 where
     T: DeserializeOwned + Serialize,
 {
-    let value = to_json(ctx, &Dynamic::from_map(map))?;
-    serde_json::from_value::<T>(value.clone()).map_err(|e| {
+    let value = strict_json(&Dynamic::from_map(map), what).map_err(|m| error(ctx, m))?;
+    let parsed = serde_json::from_value::<T>(value.clone()).map_err(|e| {
         let message = match bad_field(&value, base) {
             Some((field, v, why)) => format!("{what}.{field} = {v}: {why}"),
             None => format!("{what}: {e}"),
         };
         error(ctx, message)
-    })
+    })?;
+    let echo = serde_json::to_value(&parsed).at(ctx)?;
+    check_echo(&value, &echo, what).map_err(|m| error(ctx, m))?;
+    Ok(parsed)
 }
 
 /// Deserialises `overrides` laid over `base`: nested maps merge field by field (unless they
@@ -126,7 +243,8 @@ where
     T: DeserializeOwned + Serialize,
 {
     let mut merged = serde_json::to_value(base).at(ctx)?;
-    merge(&mut merged, to_json(ctx, &Dynamic::from_map(overrides))?);
+    let given = strict_json(&Dynamic::from_map(overrides), what).map_err(|m| error(ctx, m))?;
+    merge(&mut merged, given);
     let map = rhai::serde::to_dynamic(&merged).map_err(|e| error(ctx, e))?;
     options(ctx, map.cast::<Map>(), base, what)
 }

@@ -54,17 +54,60 @@ fn npy_data(ctx: &NativeCallContext, data: &Dynamic) -> ScriptResult<(Vec<f64>, 
     Ok((table.concat(), shape))
 }
 
+/// Refuses non-finite values unless `allow` (the options' `allow_non_finite`): names the
+/// column (or `what`) and the first offending index and value.
+fn finite_or_allowed(
+    ctx: &NativeCallContext,
+    allow: bool,
+    what: &str,
+    values: &[f64],
+) -> ScriptResult<()> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(i) if !allow => Err(error(
+            ctx,
+            format!(
+                "{what}[{i}] = {}: not finite; pass #{{allow_non_finite: true}} to write it anyway",
+                values[i]
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// `allow_non_finite` from a writer's options map (the only field; anything else is an error).
+fn allow_non_finite(ctx: &NativeCallContext, options: Map) -> ScriptResult<bool> {
+    let mut allow = false;
+    for (k, v) in options {
+        match (k.as_str(), v.as_bool()) {
+            ("allow_non_finite", Ok(b)) => allow = b,
+            ("allow_non_finite", Err(t)) => {
+                return Err(error(
+                    ctx,
+                    format!("options.allow_non_finite must be a bool, got {t}"),
+                ))
+            }
+            (other, _) => {
+                return Err(error(
+                    ctx,
+                    format!("options.{other}: unknown field (the only field is allow_non_finite)"),
+                ))
+            }
+        }
+    }
+    Ok(allow)
+}
+
 #[export_module]
 mod io_api {
     use super::{npy_data, plain};
     use crate::io;
-    use crate::script::convert::{rows, strings, to_json, WithPosition};
+    use crate::script::convert::{rows, strings, WithPosition};
     use crate::script::HostContext;
-    use rhai::{Array, Dynamic, NativeCallContext};
+    use rhai::{Array, Dynamic, Map, NativeCallContext};
 
     type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
 
-    /// Writes numeric columns (arrays or Signals' samples) as CSV with one header per column.
+    /// Writes numeric columns (arrays or Signals' samples) as CSV with one header per column; NaN and infinities are refused.
     #[rhai_fn(return_raw)]
     pub fn write_csv(
         ctx: NativeCallContext,
@@ -72,9 +115,25 @@ mod io_api {
         headers: Array,
         columns: Array,
     ) -> Res<()> {
+        write_csv_with(ctx, path, headers, columns, Map::new())
+    }
+
+    /// write_csv with options #{allow_non_finite: bool} (false: NaN and infinities are refused).
+    #[rhai_fn(name = "write_csv", return_raw)]
+    pub fn write_csv_with(
+        ctx: NativeCallContext,
+        path: &str,
+        headers: Array,
+        columns: Array,
+        options: Map,
+    ) -> Res<()> {
+        let allow = super::allow_non_finite(&ctx, options)?;
         let file = HostContext::of(&ctx)?.resolve_output(path).at(&ctx)?;
         let headers = strings(&ctx, &headers, "headers")?;
         let columns = rows(&ctx, &columns, "columns")?;
+        for (i, c) in columns.iter().enumerate() {
+            super::finite_or_allowed(&ctx, allow, &format!("columns[{i}]"), c)?;
+        }
         let header_refs: Vec<&str> = headers.iter().map(String::as_str).collect();
         let column_refs: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
         io::write_csv(&file, &header_refs, &column_refs).at(&ctx)
@@ -101,19 +160,53 @@ mod io_api {
         io::write_csv_rows(&file, &headers, &table).at(&ctx)
     }
 
-    /// Writes any value (maps, arrays, numbers, strings, Signals, Spectra) as pretty JSON.
+    /// Writes any value (maps, arrays, numbers, strings, Signals, Spectra) as pretty JSON; NaN and infinities are refused (JSON has no such numbers).
     #[rhai_fn(return_raw)]
     pub fn write_json(ctx: NativeCallContext, path: &str, value: Dynamic) -> Res<()> {
+        write_json_with(ctx, path, value, Map::new())
+    }
+
+    /// write_json with options #{allow_non_finite: bool} (true writes NaN and infinities as null).
+    #[rhai_fn(name = "write_json", return_raw)]
+    pub fn write_json_with(
+        ctx: NativeCallContext,
+        path: &str,
+        value: Dynamic,
+        options: Map,
+    ) -> Res<()> {
+        let allow = super::allow_non_finite(&ctx, options)?;
         let file = HostContext::of(&ctx)?.resolve_output(path).at(&ctx)?;
-        let json = to_json(&ctx, &plain(&value))?;
+        let json = if allow {
+            serde_json::to_value(plain(&value)).at(&ctx)?
+        } else {
+            crate::script::convert::strict_json(&plain(&value), "value").map_err(|m| {
+                super::error(
+                    &ctx,
+                    format!("{m}; pass #{{allow_non_finite: true}} to write it as null"),
+                )
+            })?
+        };
         io::write_json(&file, &json).at(&ctx)
     }
 
-    /// Writes a float64 .npy array: a Signal or array of numbers (1D) or an array of equal-length rows (2D).
+    /// Writes a float64 .npy array: a Signal or array of numbers (1D) or an array of equal-length rows (2D); NaN and infinities are refused.
     #[rhai_fn(return_raw)]
     pub fn write_npy(ctx: NativeCallContext, path: &str, data: Dynamic) -> Res<()> {
+        write_npy_with(ctx, path, data, Map::new())
+    }
+
+    /// write_npy with options #{allow_non_finite: bool}.
+    #[rhai_fn(name = "write_npy", return_raw)]
+    pub fn write_npy_with(
+        ctx: NativeCallContext,
+        path: &str,
+        data: Dynamic,
+        options: Map,
+    ) -> Res<()> {
+        let allow = super::allow_non_finite(&ctx, options)?;
         let file = HostContext::of(&ctx)?.resolve_output(path).at(&ctx)?;
         let (values, shape) = npy_data(&ctx, &data)?;
+        super::finite_or_allowed(&ctx, allow, "data", &values)?;
         io::write_npy(&file, &values, &shape).at(&ctx)
     }
 }

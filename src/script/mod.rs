@@ -14,6 +14,7 @@ mod accuracy;
 mod convert;
 mod figure;
 mod format;
+mod guard;
 mod host;
 mod io;
 mod laminate;
@@ -78,6 +79,10 @@ pub struct HostOptions {
     pub max_operations: u64,
     /// Hide progress display (script `print` output is still shown).
     pub quiet: bool,
+    /// Wall-clock limit of a script run, native work included (`--time-limit`); `None`: none.
+    pub time_limit: Option<Duration>,
+    /// Memory limit of one request (a scene, a run, a signal) in bytes (`--max-memory`).
+    pub max_memory: u64,
 }
 
 impl Default for HostOptions {
@@ -87,6 +92,8 @@ impl Default for HostOptions {
             params: BTreeMap::new(),
             max_operations: DEFAULT_MAX_OPERATIONS,
             quiet: false,
+            time_limit: None,
+            max_memory: crate::budget::DEFAULT_MEMORY_LIMIT,
         }
     }
 }
@@ -140,6 +147,7 @@ fn one_line(message: &str) -> String {
 #[derive(Debug)]
 pub struct HostContext {
     out_dir: PathBuf,
+    root: Option<crate::io::OutputRoot>,
     params: BTreeMap<String, Dynamic>,
     quiet: bool,
     script: RwLock<String>,
@@ -169,8 +177,10 @@ impl HostContext {
         self.quiet
     }
 
-    /// Resolves a script-given output path under the output directory and creates its
-    /// parent directories. Absolute paths and `..` components are rejected, naming the path.
+    /// Resolves a script-given output path under the output directory. Absolute paths and
+    /// `..` components are rejected, naming the path. Directories are created when the file
+    /// is written, beneath the output root opened by the host: a symlink that leads out of it
+    /// is refused then (see [`crate::io::OutputRoot`]).
     pub fn resolve_output(&self, path: &str) -> Result<PathBuf, String> {
         let rel = Path::new(path);
         if path.is_empty() {
@@ -190,12 +200,10 @@ impl HostContext {
                 "output path '{path}' leaves the output directory ('..' is not allowed)"
             ));
         }
-        let full = self.out_dir.join(rel);
-        if let Some(parent) = full.parent() {
-            std::fs::create_dir_all(parent)
-                .map_err(|e| format!("cannot create directory {}: {e}", parent.display()))?;
+        if rel.file_name().is_none() {
+            return Err(format!("output path '{path}' names no file"));
         }
-        Ok(full)
+        Ok(self.out_dir.join(rel))
     }
 
     /// Prints a script message to stderr, prefixed with the script name, without
@@ -247,6 +255,8 @@ pub struct Host {
     engine: Engine,
     context: Arc<HostContext>,
     max_operations: u64,
+    time_limit: Option<Duration>,
+    max_memory: u64,
 }
 
 impl Host {
@@ -255,15 +265,35 @@ impl Host {
         for name in options.params.keys() {
             check_param_name(name).map_err(|m| ScriptError::new("--set", m))?;
         }
-        std::fs::create_dir_all(&options.out_dir).map_err(|e| {
-            ScriptError::new(
-                options.out_dir.display().to_string(),
-                format!("cannot create output directory: {e}"),
-            )
-        })?;
+        if options.max_operations == 0 {
+            // Rhai reads 0 as "unlimited": refuse it rather than drop the limit silently.
+            return Err(ScriptError::new(
+                "--max-operations",
+                "0 is not a limit; give a positive operation budget",
+            ));
+        }
+        if let Some(t) = options.time_limit.filter(|t| t.is_zero()) {
+            return Err(ScriptError::new(
+                "--time-limit",
+                format!(
+                    "{} s is not a limit; give a positive number of seconds",
+                    t.as_secs_f64()
+                ),
+            ));
+        }
+        if options.max_memory == 0 {
+            return Err(ScriptError::new(
+                "--max-memory",
+                "0 is not a limit; give a positive size",
+            ));
+        }
+
+        let root = crate::io::OutputRoot::open(&options.out_dir)
+            .map_err(|e| ScriptError::new(options.out_dir.display().to_string(), e.to_string()))?;
         crate::solve::show_progress(!options.quiet);
         let context = Arc::new(HostContext {
             out_dir: options.out_dir,
+            root: Some(root),
             params: options.params,
             quiet: options.quiet,
             script: RwLock::new(String::new()),
@@ -274,6 +304,8 @@ impl Host {
             engine,
             context,
             max_operations: options.max_operations,
+            time_limit: options.time_limit,
+            max_memory: options.max_memory,
         })
     }
 
@@ -299,9 +331,43 @@ impl Host {
         let ast = self.compile(name, text)?;
         let mut scope = self.scope();
         self.context.start(name);
-        let result = self.engine.run_ast_with_scope(&mut scope, &ast);
+        crate::budget::start(self.time_limit);
+        crate::budget::set_memory_limit(self.max_memory);
+        let result = self.guarded(name, || {
+            let mut run = || self.engine.run_ast_with_scope(&mut scope, &ast);
+            match &self.context.root {
+                Some(root) => root.within(run),
+                None => run(),
+            }
+        });
         self.context.finish();
-        result.map_err(|e| self.render(name, &e))
+        crate::budget::clear();
+        result?.map_err(|e| self.render(name, &e))
+    }
+
+    /// Runs `f`, turning a panic that escaped a native function into a [`ScriptError`] at the
+    /// script position last reached (no input should get there: this is the last line of
+    /// defence, and the message says it is a bug).
+    fn guarded<T>(&self, name: &str, f: impl FnOnce() -> T) -> Result<T, ScriptError> {
+        guard::reset();
+        let _guarded = guard::Guarded::start();
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|payload| {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            let message = format!(
+                "internal error (a bug, please report it): {what}{}",
+                guard::panic_location()
+                    .map(|l| format!(" at {l}"))
+                    .unwrap_or_default()
+            );
+            match guard::last_position() {
+                Some(pos) => ScriptError::at(name, pos, &message),
+                None => ScriptError::new(name, message),
+            }
+        })
     }
 
     /// The function list of `--api`, grouped by module.
@@ -337,6 +403,7 @@ impl Host {
         let inner = err.unwrap_inner();
         let base = match inner {
             EvalAltResult::ErrorRuntime(value, _) => value.to_string(),
+            EvalAltResult::ErrorTerminated(token, _) => token.to_string(),
             EvalAltResult::ErrorTooManyOperations(_) => format!(
                 "operation limit {} exceeded (endless loop? raise it with --max-operations)",
                 self.max_operations
@@ -411,6 +478,23 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
         .set_module_resolver(DummyModuleResolver::new())
         .set_default_tag(Dynamic::from(Arc::clone(context)))
         .disable_symbol("eval");
+    // The time limit and Ctrl-C, checked between operations (native calls check them too,
+    // in their long loops: see `crate::budget`).
+    engine.on_progress(|_| {
+        crate::budget::check()
+            .err()
+            .map(|stop| Dynamic::from(stop.to_string()))
+    });
+    // Statement-level position tracking, so that a panic escaping a native function is
+    // still reported at file:line:col (see `guard`).
+    #[allow(deprecated)] // "volatile", not deprecated (rhai 1.27)
+    engine.register_debugger(
+        |_, debugger| debugger,
+        |_, _, _, _, pos| {
+            guard::note(pos);
+            Ok(rhai::debugger::DebuggerCommand::StepInto)
+        },
+    );
     let printer = Arc::clone(context);
     engine.on_print(move |text| printer.print(text));
     let debugger = Arc::clone(context);
@@ -450,7 +534,8 @@ fn check_param_name(name: &str) -> Result<(), String> {
 pub fn parse_param_value(text: &str) -> Dynamic {
     if let Ok(i) = text.parse::<rhai::INT>() {
         Dynamic::from_int(i)
-    } else if let Ok(f) = text.parse::<rhai::FLOAT>() {
+    } else if let Some(f) = text.parse::<rhai::FLOAT>().ok().filter(|f| f.is_finite()) {
+        // "nan" and "inf" stay strings: a parameter never smuggles in a non-finite number
         Dynamic::from_float(f)
     } else if let Ok(b) = text.parse::<bool>() {
         Dynamic::from_bool(b)
@@ -582,6 +667,7 @@ mod tests {
     fn context(dir: &Path) -> HostContext {
         HostContext {
             out_dir: dir.to_path_buf(),
+            root: None,
             params: BTreeMap::new(),
             quiet: true,
             script: RwLock::new(String::new()),
@@ -595,15 +681,11 @@ mod tests {
         let ctx = context(&dir);
         let ok = ctx.resolve_output("plots/a/b.png").expect("relative path");
         assert_eq!(ok, dir.join("plots/a/b.png"));
-        assert!(
-            dir.join("plots/a").is_dir(),
-            "parent directories are created"
-        );
         for bad in ["../x.png", "a/../../x.png", "/tmp/x.png", ""] {
             let e = ctx.resolve_output(bad).expect_err(bad);
             assert!(e.contains(&format!("'{bad}'")) || bad.is_empty(), "{e}");
         }
-        std::fs::remove_dir_all(&dir).expect("clean up");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

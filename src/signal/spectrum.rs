@@ -81,7 +81,7 @@ impl Spectrum {
             .filter(|&k| (k == 0 || p[k] > p[k - 1]) && (k + 1 == m || p[k] >= p[k + 1]))
             .collect();
         candidates.sort_by(|&a, &b| p[b].total_cmp(&p[a]));
-        let mut kept: Vec<(f64, f64)> = Vec::with_capacity(n);
+        let mut kept: Vec<(f64, f64)> = Vec::with_capacity(n.min(m));
         for k in candidates {
             if kept.len() == n {
                 break;

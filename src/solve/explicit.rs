@@ -134,7 +134,7 @@ pub(super) fn run(
             ratio,
         });
     }
-    let steps = (config.duration_s / dt).round().max(1.0) as usize;
+    let steps = super::run_steps(model, sources.len(), receivers.len(), config, dt)?;
     let n = model.dofs();
     let coef = Coefficients::new(model, dt);
     let forces = sample_sources(sources, dt, steps)?;
@@ -196,6 +196,9 @@ pub(super) fn run(
     let clock = Instant::now();
 
     for step in 0..steps {
+        if step % 256 == 0 {
+            crate::budget::check()?;
+        }
         if step % config.ledger_every == 0 {
             sample_ledger(
                 model,

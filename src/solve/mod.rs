@@ -231,6 +231,9 @@ pub fn run(
     if config.ledger_every == 0 {
         return Err(Error::invalid("ledger_every", 0, "must be at least 1"));
     }
+    if config.snapshot_every == Some(0) {
+        return Err(Error::invalid("snapshot_every", 0, "must be at least 1"));
+    }
     validate_weights(model, sources.iter().map(|s| ("source", &s.weights)))?;
     validate_weights(model, receivers.iter().map(|r| ("receiver", &r.weights)))?;
     for (field, initial) in [
@@ -283,6 +286,60 @@ fn validate_weights<'a>(
         }
     }
     Ok(())
+}
+
+/// The number of steps of a run of `duration_s` at `dt`, refused (naming `duration_s` or `dt_s`
+/// with the estimate) when the traces, sources, crack records and snapshots it would keep
+/// exceed the memory limit ([`crate::budget::check_memory`]); estimated before allocating.
+fn run_steps(
+    model: &Model,
+    sources: usize,
+    receivers: usize,
+    config: &RunConfig,
+    dt: f64,
+) -> Result<usize> {
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(Error::invalid(
+            "dt_s",
+            dt,
+            "the time step is not a finite positive number (dt_crit not finite: check the materials' densities and moduli)",
+        ));
+    }
+    let steps = (config.duration_s / dt).round().max(1.0);
+    let crack_pairs = model.crack.as_ref().map_or(0, |c| c.pairs.len()) as f64;
+    let per_step = 8.0
+        * (sources as f64
+            + receivers as f64
+            + if config.record_crack {
+                2.0 * crack_pairs
+            } else {
+                0.0
+            }
+            + if config.contact.is_some() { 3.0 } else { 0.0 });
+    let ledger = 8.0 * 9.0 * steps / config.ledger_every.max(1) as f64;
+    let snapshots = match (config.snapshot_every, &config.snapshot_dir) {
+        (Some(k), None) => 8.0 * model.dofs() as f64 * (steps / k.max(1) as f64).ceil(),
+        _ => 0.0,
+    };
+    let bytes = per_step * steps + ledger + snapshots;
+    let (field, value) = match config.dt_s {
+        Some(d) if d < 1e-12 => ("dt_s", format!("{d} s")),
+        _ => ("duration_s", format!("{} s", config.duration_s)),
+    };
+    crate::budget::check_memory(
+        field,
+        format!("{value} ({steps:.3e} steps of {dt:.3e} s)"),
+        bytes,
+        "shorten the run, take a larger step, or stream snapshots with snapshot_dir",
+    )?;
+    if steps > (u32::MAX as f64) {
+        return Err(Error::invalid(
+            field,
+            value,
+            format!("gives {steps:.3e} steps, more than {}", u32::MAX),
+        ));
+    }
+    Ok(steps as usize)
 }
 
 /// The source signals evaluated at every solver step t_n = n dt, n < steps.

@@ -135,7 +135,7 @@ pub(super) fn run(
     let dt = config
         .dt_s
         .ok_or_else(|| Error::invalid("dt_s", "none", "Newmark needs an explicit time step"))?;
-    let steps = (config.duration_s / dt).round().max(1.0) as usize;
+    let steps = super::run_steps(model, sources.len(), receivers.len(), config, dt)?;
     let n = model.dofs();
     let mut fixed = vec![false; n];
     for &d in &model.fixed_dofs {
@@ -217,6 +217,9 @@ pub(super) fn run(
     let (c1, c2) = (4.0 / (dt * dt), 4.0 / dt);
 
     for step in 0..steps {
+        if step % 256 == 0 {
+            crate::budget::check()?;
+        }
         if step % config.ledger_every == 0 {
             sample(
                 model,

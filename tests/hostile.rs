@@ -1,0 +1,485 @@
+//! Hostile input (issue 11): the issue's reproducers, the output sandbox with symlinks, the
+//! memory limit, and a seeded fuzz run over scene maps, run options, signal, plot and io calls.
+//! Every case must end in `Ok` or a one-line error at `file:line:col`: no panic, no hang past
+//! the budget, nothing written outside the output root, no non-finite file.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use trnews::script::{Host, HostOptions};
+
+/// A fresh directory under the system temp dir, removed on drop.
+struct Temp(PathBuf);
+impl Drop for Temp {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+fn temp(tag: &str) -> Temp {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static N: AtomicU64 = AtomicU64::new(0);
+    let dir = std::env::temp_dir().join(format!(
+        "trnews-hostile-{tag}-{}-{}",
+        std::process::id(),
+        N.fetch_add(1, Ordering::Relaxed)
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    Temp(dir)
+}
+
+fn host(out: &Path, time_limit_s: f64) -> Host {
+    Host::new(HostOptions {
+        out_dir: out.to_path_buf(),
+        quiet: true,
+        max_operations: 20_000_000,
+        time_limit: Some(Duration::from_secs_f64(time_limit_s)),
+        ..HostOptions::default()
+    })
+    .expect("host")
+}
+
+/// Runs `script`; returns the error text, or None when it ran.
+fn run(out: &Path, script: &str) -> Option<String> {
+    host(out, 20.0)
+        .run_str("t.rhai", script)
+        .err()
+        .map(|e| e.to_string())
+}
+
+/// Every file under `dir` (recursively).
+fn files(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            let p = e.path();
+            if p.is_dir() && !p.is_symlink() {
+                out.extend(files(&p));
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
+const SMOKE: &str = "scene::preset(\"smoke\", #{crack: ()})";
+
+/// The reproducers of issue 11: each must be a clean error naming the field (or run cleanly).
+#[test]
+fn issue_11_reproducers_are_errors_naming_the_field() {
+    let dir = temp("repro");
+    let cases: Vec<(String, &str)> = vec![
+        (format!("{SMOKE}.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{{duration_s: 1e-6, snapshot_every: 0}});"), "snapshot_every"),
+        (format!("{SMOKE}.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{{duration_s: 1e10}});"), "duration_s"),
+        (format!("trnews::responder({SMOKE}, 1e10);"), "duration_s"),
+        ("scene::preset(\"smoke\", #{crack: (), receivers: #{x_m: []}});".into(), "receivers.x_m"),
+        ("scene::preset(\"smoke\", #{crack: 0.0/0.0});".into(), "scene.crack = NaN"),
+        ("scene::preset(\"smoke\", #{crack: #{contact: 1.0/0.0}});".into(), "scene.crack.contact = inf"),
+        ("scene::preset(\"smoke\", #{crack: []});".into(), "scene.crack = []"),
+        ("scene::preset(\"smoke\", #{transmitter: [1.0]});".into(), "scene.transmitter"),
+        ("scene::preset(\"smoke\", #{absorbing: [\"bottom\", \"bottom\"]});".into(), "absorbing"),
+        ("scene::preset(\"smoke\", #{element_size_x_m: 1e-12});".into(), "element_size_x_m"),
+        ("scene::preset(\"smoke\", #{width_m: 1e6});".into(), "width_m"),
+        ("scene::preset(\"smoke\", #{element_size_x_m: 1.0});".into(), "element_size_x_m = 1 m"),
+        ("scene::preset(\"smoke\", #{laminate: #{min_epoxy_m: 1e30}});".into(), "min_epoxy_m"),
+        ("scene::preset(\"smoke\", #{transmitter: #{peak_pa: 0.0}});".into(), "transmitter.peak_pa"),
+        ("scene::preset(\"smoke\", #{crack: #{contact: #{method: #{kind: \"augmented_lagrangian\", max_iterations: 1000000000, tolerance_m: 1e-300}}}});".into(), "max_iterations"),
+        ("scene::preset(\"smoke\", #{crack: #{contact: #{method: #{kind: \"exact\", bogus: 1}}}});".into(), "bogus"),
+        ("plot::line(\"a.png\", #{}, [#{x: [0.0, 1.0], y: [-1e308, 1e308]}]);".into(), "exceed the plottable magnitude"),
+        ("plot::heatmap(\"h.png\", #{}, [0.0, 1.0], [0.0], [[-1e308, 1e308]], \"v\");".into(), "exceed the plottable magnitude"),
+        ("plot::line(\"l.png\", #{log_y: true}, [#{x: [1.0, 2.0], y: [1e-300, 1e300]}]);".into(), "decades"),
+        ("io::write_npy(\"a.npy\", [1.0, 1.0/0.0]);".into(), "data[1] = inf"),
+        ("io::write_json(\"a.json\", #{a: 0.0/0.0});".into(), "value.a = NaN"),
+        ("io::write_csv(\"a.csv\", [\"x\"], [[0.0/0.0]]);".into(), "columns[0][0] = NaN"),
+    ];
+    for (script, needle) in &cases {
+        let t = Instant::now();
+        let err = run(&dir.0, script).unwrap_or_else(|| panic!("ran without error: {script}"));
+        assert!(err.starts_with("t.rhai:1:"), "no position: {err}");
+        assert!(
+            err.contains(needle),
+            "{script}\n  -> {err}\n  (expected {needle:?})"
+        );
+        assert!(!err.contains("internal error"), "{err}");
+        assert!(
+            t.elapsed() < Duration::from_secs(10),
+            "{script} took {:?}",
+            t.elapsed()
+        );
+    }
+    // periodogram peaks with an absurd count: clean result, no abort
+    assert_eq!(
+        run(&dir.0, "let s = signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8); s.periodogram().peaks(10000000000, 1.0);"),
+        None
+    );
+    // written files are all finite (nothing was written by the refused calls)
+    assert!(files(&dir.0).is_empty(), "{:?}", files(&dir.0));
+}
+
+/// The operation limit 0 (Rhai's "unlimited") is refused; the time limit stops a quadratic loop.
+#[test]
+fn budgets_stop_runaway_scripts() {
+    let dir = temp("budget");
+    let zero = Host::new(HostOptions {
+        out_dir: dir.0.clone(),
+        max_operations: 0,
+        ..HostOptions::default()
+    });
+    assert!(zero
+        .err()
+        .expect("refused")
+        .to_string()
+        .contains("--max-operations"));
+    let h = Host::new(HostOptions {
+        out_dir: dir.0.clone(),
+        quiet: true,
+        time_limit: Some(Duration::from_millis(1500)),
+        ..HostOptions::default()
+    })
+    .expect("host");
+    let t = Instant::now();
+    let err = h
+        .run_str("t.rhai", "let a = []; loop { a.push(a.len()); }")
+        .expect_err("stops");
+    assert!(t.elapsed() < Duration::from_secs(8), "{:?}", t.elapsed());
+    let msg = err.to_string();
+    assert!(msg.contains("time limit") || msg.contains("array"), "{msg}");
+    // native work: a long simulation stops at the time limit too
+    let t = Instant::now();
+    let err = h
+        .run_str(
+            "t.rhai",
+            "let s = scene::preset(\"smoke\", #{crack: ()}); s.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{duration_s: 1e-2});",
+        )
+        .expect_err("stops");
+    assert!(err.to_string().contains("time limit"), "{err}");
+    assert!(t.elapsed() < Duration::from_secs(8), "{:?}", t.elapsed());
+}
+
+/// A scene above the memory limit is refused in under a second, with the estimate.
+#[test]
+fn memory_limit_refuses_large_scenes_quickly() {
+    let dir = temp("mem");
+    let h = Host::new(HostOptions {
+        out_dir: dir.0.clone(),
+        quiet: true,
+        max_memory: 64 << 20,
+        ..HostOptions::default()
+    })
+    .expect("host");
+    let t = Instant::now();
+    let err = h
+        .run_str(
+            "t.rhai",
+            "scene::build(#{element_size_x_m: 5e-6, element_size_y_m: 5e-6});",
+        )
+        .expect_err("refused")
+        .to_string();
+    assert!(t.elapsed() < Duration::from_secs(1), "{:?}", t.elapsed());
+    assert!(
+        err.contains("would need about") && err.contains("GiB"),
+        "{err}"
+    );
+    assert!(
+        err.contains("element_size_x_m") && err.contains("64.000 MiB"),
+        "{err}"
+    );
+    trnews::budget::set_memory_limit(trnews::budget::DEFAULT_MEMORY_LIMIT);
+}
+
+#[cfg(unix)]
+#[test]
+fn sandbox_symlinks_never_lead_out() {
+    use std::os::unix::fs::symlink;
+    let base = temp("sandbox");
+    let out = base.0.join("out");
+    let outside = base.0.join("outside");
+    std::fs::create_dir_all(out.join("inner")).expect("dirs");
+    std::fs::create_dir_all(&outside).expect("dirs");
+    symlink(&outside, out.join("link")).expect("link");
+    symlink("../link", out.join("inner/nested")).expect("nested link");
+    symlink("inner", out.join("inside")).expect("inside link");
+    let writes = [
+        "io::write_csv(\"link/x.csv\", [\"a\"], [[1.0]]);",
+        "io::write_npy(\"link/sub/x.npy\", [1.0]);",
+        "io::write_json(\"inner/nested/x.json\", #{a: 1});",
+        "plot::line(\"link/p.png\", #{}, [#{x: [0.0, 1.0], y: [1.0, 2.0]}]);",
+        "plot::line(\"link/p.svg\", #{}, [#{x: [0.0, 1.0], y: [1.0, 2.0]}]);",
+        "let s = scene::preset(\"smoke\", #{crack: ()}); s.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{duration_s: 2e-7, snapshot_every: 5, snapshot_dir: \"link/snaps\"});",
+    ];
+    for w in writes {
+        let err = run(&out, w).unwrap_or_else(|| panic!("wrote through the link: {w}"));
+        assert!(
+            err.contains("leads outside the output directory"),
+            "{w}: {err}"
+        );
+    }
+    // a link that stays inside is fine
+    assert_eq!(
+        run(&out, "io::write_csv(\"inside/ok.csv\", [\"a\"], [[1.0]]);"),
+        None
+    );
+    assert!(out.join("inner/ok.csv").is_file());
+    // swapped while a script writes: a thread flips `flip` between inside and outside
+    let flip = out.join("flip");
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let flipper = {
+        let (flip, outside, stop) = (flip.clone(), outside.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let mut k = 0u64;
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                let tmp = flip.with_file_name(format!("flip.tmp{k}"));
+                let target: &Path = if k % 2 == 0 {
+                    Path::new("inner")
+                } else {
+                    &outside
+                };
+                let _ = symlink(target, &tmp);
+                let _ = std::fs::rename(&tmp, &flip);
+                k += 1;
+            }
+        })
+    };
+    let _ = run(
+        &out,
+        "for i in 0..400 { try { io::write_csv(`flip/f${i}.csv`, [\"a\"], [[1.0]]); } catch {} }",
+    );
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    flipper.join().expect("flipper");
+    assert!(
+        files(&outside).is_empty(),
+        "written outside: {:?}",
+        files(&outside)
+    );
+    assert!(
+        files(&out.join("inner")).len() > 1,
+        "some writes went through the inside link"
+    );
+}
+
+#[test]
+fn stale_temp_files_of_dead_writers_are_removed() {
+    let dir = temp("stale");
+    // pid 999999999 does not exist (above Linux's pid_max)
+    let stale = dir.0.join(".x.tmp-999999999-3.csv");
+    std::fs::write(&stale, "half").expect("stale");
+    assert_eq!(
+        run(&dir.0, "io::write_csv(\"x.csv\", [\"a\"], [[1.0]]);"),
+        None
+    );
+    if cfg!(target_os = "linux") {
+        assert!(!stale.exists(), "stale temp file left");
+    }
+    assert!(dir.0.join("x.csv").is_file());
+}
+
+// ------------------------------------------------------------------ fuzz
+
+/// A small seeded generator (SplitMix64). Written by hand rather than with proptest: the
+/// cases are Rhai source texts run by one shared host, where shrinking would not apply, and
+/// the seed alone must reproduce a failure (`TRNEWS_FUZZ_SEED`, `TRNEWS_FUZZ_CASES`).
+struct Gen(u64);
+impl Gen {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn pick<'a>(&mut self, v: &[&'a str]) -> &'a str {
+        v[(self.next() % v.len() as u64) as usize]
+    }
+    fn value(&mut self) -> String {
+        self.pick(&[
+            "0.0/0.0",
+            "1.0/0.0",
+            "-1.0/0.0",
+            "()",
+            "[]",
+            "#{}",
+            "[1.0]",
+            "0",
+            "-1",
+            "0.0",
+            "1e-300",
+            "1e300",
+            "1e30",
+            "1e-12",
+            "1.0",
+            "1e10",
+            "\"x\"",
+            "true",
+            "#{x: 1}",
+            "9223372036854775807",
+            "1e-18",
+            "5e-7",
+            "2e-3",
+        ])
+        .to_string()
+    }
+}
+
+const SCENE_FIELDS: &[&str] = &[
+    "width_m",
+    "element_size_x_m",
+    "element_size_y_m",
+    "absorbing",
+    "absorber",
+    "transducer",
+    "transmitter",
+    "receivers",
+    "crack",
+    "laminate",
+    "plane",
+    "fix_bottom_corners",
+    "transmitter.peak_pa",
+    "transmitter.depth_top_m",
+    "receivers.x_m",
+    "crack.depth_m",
+    "crack.contact",
+    "crack.tied",
+    "crack.contact.friction",
+    "laminate.min_epoxy_m",
+    "laminate.pairs",
+    "absorber.kind",
+];
+const RUN_FIELDS: &[&str] = &[
+    "duration_s",
+    "dt_s",
+    "snapshot_every",
+    "ledger_every",
+    "integrator",
+    "force",
+    "bogus",
+    "record_crack",
+    "contact",
+    "snapshot_dir",
+];
+
+/// A map literal setting dotted `field` to `value`.
+fn nested(field: &str, value: &str) -> String {
+    match field.split_once('.') {
+        Some((a, rest)) => format!("#{{{a}: {}}}", nested(rest, value)),
+        None => format!("#{{{field}: {value}}}"),
+    }
+}
+
+fn case(g: &mut Gen) -> (String, String) {
+    let v = g.value();
+    match g.next() % 5 {
+        0 => {
+            let f = g.pick(SCENE_FIELDS);
+            (
+                format!("scene::preset(\"smoke\", {});", nested(f, &v)),
+                f.to_string(),
+            )
+        }
+        1 => {
+            let f = g.pick(RUN_FIELDS);
+            (format!("let s = scene::preset(\"smoke\", #{{crack: ()}}); s.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{{duration_s: 2e-7, {f}: {v}}});"), f.to_string())
+        }
+        2 => {
+            let call = g.pick(&[
+                "signal::chirp(V, 2e6, 5e-6, 5e-6, 1e-8)",
+                "signal::chirp(2e5, 2e6, V, 5e-6, 1e-8)",
+                "signal::chirp(2e5, 2e6, 5e-6, 5e-6, V)",
+                "signal::chirp(#{dt_s: 1e-8, t1_s: 5e-6, total_s: 5e-6, amplitude: V})",
+                "signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8).envelope().scale(V)",
+                "signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8).periodogram().peaks(V, 1.0)",
+            ]);
+            (format!("{};", call.replace('V', &v)), String::new())
+        }
+        3 => {
+            let call = g.pick(&[
+                "plot::line(\"f.png\", #{}, [#{x: [0.0, 1.0], y: [V, 1.0]}])",
+                "plot::line(\"f.png\", #{log_y: true}, [#{x: [1.0, 2.0], y: [1.0, V]}])",
+                "plot::heatmap(\"h.png\", #{}, [0.0, 1.0], [0.0], [[V, 1.0]], \"v\")",
+                "plot::line(\"f.png\", #{title: V}, [#{x: [0.0, 1.0], y: [1.0, 2.0]}])",
+            ]);
+            (format!("{};", call.replace('V', &v)), String::new())
+        }
+        _ => {
+            let call = g.pick(&[
+                "io::write_npy(\"a.npy\", [V])",
+                "io::write_json(\"a.json\", #{a: V})",
+                "io::write_csv(\"a.csv\", [\"x\"], [[V]])",
+                "io::write_csv(V, [\"x\"], [[1.0]])",
+            ]);
+            (format!("{};", call.replace('V', &v)), String::new())
+        }
+    }
+}
+
+/// No file written under `dir` holds a non-finite number (CSV text, JSON, NPY float64).
+fn assert_finite_files(dir: &Path) {
+    for f in files(dir) {
+        let bytes = std::fs::read(&f).unwrap_or_default();
+        let name = f.to_string_lossy().to_string();
+        if name.ends_with(".npy") {
+            let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+            for c in bytes[10 + hlen..].chunks_exact(8) {
+                let v = f64::from_le_bytes(c.try_into().expect("8"));
+                assert!(v.is_finite(), "{name} holds {v}");
+            }
+        } else if name.ends_with(".csv") || name.ends_with(".json") {
+            let text = String::from_utf8_lossy(&bytes);
+            assert!(
+                !text.contains("NaN") && !text.contains("inf") && !text.contains("null"),
+                "{name}: {text}"
+            );
+        }
+    }
+}
+
+#[test]
+fn fuzz_scene_run_signal_plot_and_io_calls() {
+    let seed: u64 = std::env::var("TRNEWS_FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(11);
+    let cases: usize = std::env::var("TRNEWS_FUZZ_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(300);
+    let budget_s = 10.0;
+    let dir = temp("fuzz");
+    let h = host(&dir.0, budget_s);
+    let mut g = Gen(seed);
+    let start = Instant::now();
+    let (mut ok, mut errors) = (0, 0);
+    for i in 0..cases {
+        let (script, field) = case(&mut g);
+        let t = Instant::now();
+        match h.run_str("fuzz.rhai", &script) {
+            Ok(()) => ok += 1,
+            Err(e) => {
+                errors += 1;
+                let msg = e.to_string();
+                assert!(
+                    !msg.contains("internal error"),
+                    "case {i} (seed {seed}): {script}\n  -> {msg}"
+                );
+                assert!(
+                    msg.starts_with("fuzz.rhai:1:"),
+                    "case {i}: no position: {msg}"
+                );
+                if !field.is_empty() && !msg.contains("time limit") {
+                    assert!(
+                        field.split('.').any(|part| msg.contains(part)),
+                        "case {i} (seed {seed}): the error does not name {field}: {script}\n  -> {msg}"
+                    );
+                }
+            }
+        }
+        assert!(
+            t.elapsed().as_secs_f64() < budget_s + 5.0,
+            "case {i} hung: {script}"
+        );
+    }
+    assert_finite_files(&dir.0);
+    eprintln!(
+        "fuzz: seed {seed}, {cases} cases ({ok} ran, {errors} errors) in {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+}
