@@ -91,6 +91,7 @@ fn issue_11_reproducers_are_errors_naming_the_field() {
         ("io::write_npy(\"a.npy\", [1.0, 1.0/0.0]);".into(), "data[1] = inf"),
         ("io::write_json(\"a.json\", #{a: 0.0/0.0});".into(), "value.a = NaN"),
         ("io::write_csv(\"a.csv\", [\"x\"], [[0.0/0.0]]);".into(), "columns[0][0] = NaN"),
+        ("io::write_csv_rows(\"r.csv\", [\"a\", \"b\"], [[\"x\", 1.0/0.0]]);".into(), "rows[0][1] = inf"),
     ];
     for (script, needle) in &cases {
         let t = Instant::now();

@@ -153,10 +153,25 @@ mod io_api {
             .iter()
             .map(|row| {
                 row.read_lock::<Array>()
-                    .map(|r| r.iter().map(|v| v.to_string()).collect())
-                    .unwrap_or_else(|| vec![row.to_string()])
+                    .map(|r| r.iter().cloned().collect())
+                    .unwrap_or_else(|| vec![row.clone()])
             })
-            .collect();
+            .collect::<Vec<Vec<Dynamic>>>()
+            .iter()
+            .enumerate()
+            .map(|(i, row)| {
+                row.iter()
+                    .enumerate()
+                    .map(|(j, v)| match v.as_float() {
+                        Ok(x) if !x.is_finite() => Err(super::error(
+                            &ctx,
+                            format!("rows[{i}][{j}] = {x}: a non-finite number in a table"),
+                        )),
+                        _ => Ok(v.to_string()),
+                    })
+                    .collect()
+            })
+            .collect::<Res<_>>()?;
         io::write_csv_rows(&file, &headers, &table).at(&ctx)
     }
 
