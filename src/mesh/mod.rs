@@ -99,11 +99,18 @@ pub struct Crack {
     pub pairs: Vec<CrackPair>,
 }
 
-/// Splits [a, b] with breakpoints into pieces no longer than `h` (at least one per piece).
+/// Relative tolerance on the number of elements per interval: an interval that is a whole
+/// number of element sizes up to round-off (12e-3 / 50e-6 = 240.00000000000003) gets that
+/// number, not one more.
+const COUNT_TOLERANCE: f64 = 1e-9;
+
+/// Splits [a, b] with breakpoints into pieces no longer than `h` (at least one per piece,
+/// up to the relative round-off [`COUNT_TOLERANCE`]).
 fn subdivide(breaks: &[f64], h: f64) -> Vec<f64> {
     let mut out = vec![breaks[0]];
     for w in breaks.windows(2) {
-        let n = ((w[1] - w[0]) / h).ceil().max(1.0) as usize;
+        let ratio = (w[1] - w[0]) / h;
+        let n = (ratio * (1.0 - COUNT_TOLERANCE)).ceil().max(1.0) as usize;
         for k in 1..=n {
             out.push(if k == n {
                 w[1]
@@ -459,6 +466,14 @@ mod tests {
     use super::*;
     use crate::laminate::StochasticSpec;
     use crate::material::Plane;
+
+    #[test]
+    fn whole_numbers_of_elements_survive_round_off() {
+        // 12e-3 / 50e-6 = 240.00000000000003 in floating point: 240 rows, not 241.
+        assert_eq!(subdivide(&[0.0, 12e-3], 50e-6).len(), 241);
+        assert_eq!(subdivide(&[0.0, 12e-3 + 1e-7], 50e-6).len(), 242);
+        assert_eq!(subdivide(&[0.0, 1e-6], 50e-6).len(), 2);
+    }
 
     fn cfrp_mesh() -> (Laminate, Mesh) {
         let lam = Laminate::stochastic(
