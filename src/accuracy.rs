@@ -215,11 +215,16 @@ impl Estimate {
             };
         }
         let change = (self.value - self.companions[0]).abs();
+        let v = if (1e-2..1e3).contains(&self.value.abs()) {
+            format!("{:.3}", self.value)
+        } else {
+            format!("{:.3e}", self.value)
+        };
         match (self.verdict, self.error) {
-            (Verdict::Reliable, Some(e)) => format!("{:.3} +- {e:.1e}", self.value),
-            (Verdict::UpperBound, Some(e)) => format!("{:.3} +- < {e:.1e}", self.value),
-            (Verdict::MeshIndependent, _) => format!("{:.3} (mesh-independent)", self.value),
-            _ => format!("{:.3} (err ?, 2h: {change:.1e})", self.value),
+            (Verdict::Reliable, Some(e)) => format!("{v} +- {e:.1e}"),
+            (Verdict::UpperBound, Some(e)) => format!("{v} +- < {e:.1e}"),
+            (Verdict::MeshIndependent, _) => format!("{v} (mesh-independent)"),
+            _ => format!("{v} (err ?, 2h: {change:.1e})"),
         }
     }
 }
