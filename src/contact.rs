@@ -1,5 +1,5 @@
 //! Node-to-node contact with Coulomb friction on a horizontal crack (report Sec. 4.9,
-//! Table 3 corrected as in DESIGN.md item 4).
+//! Table 3 corrected: README, Physics notes).
 //!
 //! With lumped mass the explicit predictor u* moves each crack DOF independently, and a
 //! contact force lambda changes the next displacement by D lambda with D = dt^2 / m (divided

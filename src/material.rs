@@ -1,6 +1,6 @@
 //! Linear elastic materials reduced to 2D (report Sec. 2.1, 4.5).
 //!
-//! The report's eqs 20-22 are not a valid plane-strain reduction (DESIGN.md item 1). Here the
+//! The report's eqs 20-22 are not a valid plane-strain reduction (README, Physics notes). Here the
 //! plane matrix is built from the full 3D orthotropic compliance: plane stress keeps the
 //! in-plane block of the compliance, plane strain eliminates the out-of-plane strain
 //! `eps_33 = 0` by `S'_ij = S_ij - S_i3 S_j3 / S_33`. The result is inverted to the stiffness
@@ -274,7 +274,7 @@ mod tests {
         assert!(rel(c[1][1], f * (1.0 - nu)) < 1e-12);
         assert!(rel(c[0][1], f * nu) < 1e-12);
         assert!(rel(c[2][2], e / (2.0 * (1.0 + nu))) < 1e-12);
-        // DESIGN.md: epoxy c12 is 5.29 GPa, not the 3.17 GPa of the report's eq 22.
+        // Plane strain: epoxy c12 = nu / (1 - nu) c11 = 5.29 GPa, not the 3.17 GPa of eq 22.
         assert!((c[0][1] - 5.2857e9).abs() < 1e6);
     }
 
@@ -303,7 +303,7 @@ mod tests {
 
     #[test]
     fn epoxy_wave_speeds() {
-        // Vs = sqrt(G/rho) = 1049 m/s (DESIGN.md: about 1050 m/s), Vp = sqrt(c11/rho) = 2571 m/s.
+        // Vs = sqrt(G/rho) = 1049 m/s (about 1050 m/s), Vp = sqrt(c11/rho) = 2571 m/s.
         let w = Orthotropic::epoxy()
             .reduce(Plane::Strain)
             .unwrap()

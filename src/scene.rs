@@ -228,8 +228,9 @@ impl Default for SceneSpec {
 }
 
 impl SceneSpec {
-    /// The default scene at the `paper` resolution: 20 um columns, 10 um rows (DESIGN.md:
-    /// ~0.3% error in the low-passed surface response of the layered stack).
+    /// The default scene at the `paper` resolution: 20 um columns, 10 um rows (in a 1-D
+    /// model of the 50-pair stack, 10 um rows give ~0.3% error in the low-passed surface
+    /// response; the 2-D error is what the `accuracy` estimates measure).
     pub fn paper() -> SceneSpec {
         SceneSpec {
             element_size_x_m: 20e-6,

@@ -3,7 +3,7 @@
 //!
 //! A scene without a contacting crack is linear and time-invariant in discrete time: its
 //! response to any transmitted traction s is exactly y_n = sum_k s_k h_{n-k}, with h the
-//! response to a unit impulse at step 0 (DESIGN.md). A [`Responder`] for such a scene runs
+//! response to a unit impulse at step 0. A [`Responder`] for such a scene runs
 //! that one simulation and answers every later transmission by convolution; for a cracked
 //! scene it simulates each transmission, in parallel when there are several.
 //!

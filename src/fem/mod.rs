@@ -240,7 +240,7 @@ fn add_edge_springs(
 
 /// Lysmer-Kuhlemeyer dashpots on absorbing sides: for each boundary edge of length L, each
 /// of its two nodes gets rho Vp L / 2 normal to the side and rho Vs L / 2 along it, with rho,
-/// Vp, Vs of the element the edge belongs to (DESIGN.md item 6: the local impedance, not an
+/// Vp, Vs of the element the edge belongs to (the local impedance, not the report's
 /// average). Returns (DOF, coefficient) sorted by DOF, empty if `sides` is empty.
 pub fn assemble_dashpots(
     mesh: &Mesh,

@@ -1,5 +1,5 @@
 //! Central difference with lumped mass and diagonal damping (report eqs 65-69, with
-//! A = K - 2M/dt^2 as in DESIGN.md item 2):
+//! A = K - 2M/dt^2; the report's eq 67 misprints dt^2 as dt):
 //! (M/dt^2 + C/2dt) u_{n+1} = f_n - K u_n + 2M/dt^2 u_n - (M/dt^2 - C/2dt) u_{n-1}.
 //!
 //! The step is split so that it costs O(DOFs) only once: a fused parallel kernel computes
