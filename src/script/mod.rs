@@ -345,9 +345,11 @@ impl Host {
         result?.map_err(|e| self.render(name, &e))
     }
 
-    /// Runs `f`, turning a panic that escaped a native function into a [`ScriptError`] at the
-    /// script position last reached (no input should get there: this is the last line of
-    /// defence, and the message says it is a bug).
+    /// Runs `f`, turning a panic that escaped a native function into a [`ScriptError`] naming
+    /// the script and the Rust location (no input should get there: this is the last line of
+    /// defence, and the message says it is a bug). The script's line is not tracked: a
+    /// statement-level debugger hook made every script operation about 17x slower (measured
+    /// on a loop of 2 million additions: 216 s against 12.6 s).
     fn guarded<T>(&self, name: &str, f: impl FnOnce() -> T) -> Result<T, ScriptError> {
         guard::reset();
         let _guarded = guard::Guarded::start();
@@ -363,10 +365,7 @@ impl Host {
                     .map(|l| format!(" at {l}"))
                     .unwrap_or_default()
             );
-            match guard::last_position() {
-                Some(pos) => ScriptError::at(name, pos, &message),
-                None => ScriptError::new(name, message),
-            }
+            ScriptError::new(name, message)
         })
     }
 
@@ -485,16 +484,6 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
             .err()
             .map(|stop| Dynamic::from(stop.to_string()))
     });
-    // Statement-level position tracking, so that a panic escaping a native function is
-    // still reported at file:line:col (see `guard`).
-    #[allow(deprecated)] // "volatile", not deprecated (rhai 1.27)
-    engine.register_debugger(
-        |_, debugger| debugger,
-        |_, _, _, _, pos| {
-            guard::note(pos);
-            Ok(rhai::debugger::DebuggerCommand::StepInto)
-        },
-    );
     let printer = Arc::clone(context);
     engine.on_print(move |text| printer.print(text));
     let debugger = Arc::clone(context);
