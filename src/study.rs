@@ -210,16 +210,19 @@ pub struct ResolutionChoice {
 /// Largest refinement [`resolution_for_tolerance`] proposes: 1/8 of the element sizes
 /// (about 512x the run time).
 const FINEST_FACTOR: f64 = 0.125;
+/// Finest pilot run of [`resolution_for_tolerance`]: half the element sizes (about 8x one
+/// transmission at the scene's own sizes), so the prediction never costs more than that.
+const FINEST_PILOT: f64 = 0.5;
 
 /// Chooses element sizes for `spec` so that the first-pass responses to the TR-NEWS chirp
 /// of `chirp` (the signal every TR-NEWS measure is derived from) have a relative L2 error
 /// below `tolerance`. Pilot: the crack-tied (linear, convolving) scene at 4h, 2h and h,
-/// extended to h/2, h/4, ... while the differences do not yet shrink; the last three levels'
+/// extended to h/2 if the differences do not yet shrink; the last three levels'
 /// differences d_1 (finest vs next) and d_2 give the observed order q, clamped to [1, 2] for
 /// the prediction (a lower order refines more); error ~ d_1 / (2^q - 1) at the finest pilot
 /// level, scaling as size^q. The sizes are halved until the prediction meets the
-/// tolerance. Errors when the pilot does not converge down to 1/8 of the sizes or when
-/// more than 1/8 would be needed; either way the check after the run (an error estimate)
+/// tolerance. Errors when the pilot does not converge by h/2 or when more than 1/8 of the
+/// sizes would be needed; either way the check after the run (an error estimate)
 /// is what decides.
 pub fn resolution_for_tolerance(
     spec: &SceneSpec,
@@ -266,13 +269,14 @@ pub fn resolution_for_tolerance(
         if d2 > d1 && d1 > 0.0 {
             break (d1, d2);
         }
-        if finest <= FINEST_FACTOR {
+        if finest <= FINEST_PILOT {
             return Err(Error::invalid(
                 "tolerance",
                 tolerance,
                 format!(
-                    "cannot be predicted: the responses do not converge down to 1/8 of the \
-                     element sizes (differences {d2:.3e}, {d1:.3e}); check with an error estimate"
+                    "cannot be predicted: the responses do not converge down to half the \
+                     element sizes (differences {d2:.3e}, {d1:.3e}); refine by hand and check \
+                     with an error estimate"
                 ),
             ));
         }
