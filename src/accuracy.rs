@@ -51,18 +51,6 @@ pub enum Verdict {
     MeshIndependent,
 }
 
-impl Verdict {
-    /// Words for printed results.
-    pub fn describe(self) -> &'static str {
-        match self {
-            Verdict::Reliable => "estimate reliable",
-            Verdict::UpperBound => "converging faster than order p: error bound",
-            Verdict::Refine => "not in the asymptotic range: refine",
-            Verdict::MeshIndependent => "unchanged between meshes",
-        }
-    }
-}
-
 /// A quantity with its discretisation error estimate.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Estimate {
@@ -139,8 +127,7 @@ impl Estimate {
                 .sum::<f64>()
                 .sqrt()
         };
-        let zero = vec![0.0; n];
-        let size = norm(&f.samples, &zero);
+        let size = f.samples[..n].iter().map(|x| x * x).sum::<f64>().sqrt();
         let (d1, d2) = if size > 0.0 {
             (
                 norm(&f.samples, &m.samples) / size,

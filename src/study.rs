@@ -256,9 +256,8 @@ pub fn resolution_for_tolerance(
     let mut finest = 1.0f64;
     let (d1, d2) = loop {
         levels.push(pilot(finest)?);
-        let [coarse, medium, fine] = &levels[levels.len() - 3..] else {
-            unreachable!("at least three pilot levels")
-        };
+        let n = levels.len();
+        let (coarse, medium, fine) = (&levels[n - 3], &levels[n - 2], &levels[n - 1]);
         let (mut d1, mut d2) = (0.0f64, 0.0f64);
         for k in 0..fine.0.len() {
             let window = (0.0, chirp.record_s);

@@ -32,7 +32,7 @@ pub struct Response {
 
 /// Answers "what do the receivers record when the transmitter sends s?". Cheap to clone.
 ///
-/// With an error estimate ([`Responder::with_error_estimate`]) it also holds companions on
+/// With an error estimate ([`Responder::with_companions`]) it also holds companions on
 /// the same scene with 2x and 4x the element sizes, and every procedure below repeats itself
 /// on them and reports Richardson estimates of its results (see [`crate::accuracy`]).
 #[derive(Clone, Debug)]
@@ -113,12 +113,6 @@ impl Responder {
             })
             .collect::<Result<_>>()?;
         Ok(self)
-    }
-
-    /// Adds the companions of an error estimate (see [`Responder::companion_scenes`]).
-    pub fn with_error_estimate(self, duration_s: f64) -> Result<Responder> {
-        let (scenes, _) = self.companion_scenes()?;
-        self.with_companions(scenes, duration_s)
     }
 
     /// The companions of the error estimate (2h, 4h), empty without one.

@@ -122,7 +122,7 @@ fn viscous_spring_edge_reflects_as_plane_wave_theory_from_50_khz_to_1_mhz() {
     // incidence: measured below 1e-3 here); its spectrum over the incident one is |R(f)|,
     // against k / sqrt(k^2 + (2 w Z)^2). 300 us spans over six spring time constants
     // 2 Z / k = 47 us. Tolerance 2% of |R|: 100 um elements give > 25 per wavelength at
-    // 1 MHz, so mesh reflection and dispersion are far below it (measured: 0.1-0.6%).
+    // 1 MHz, so mesh reflection and dispersion are far below it (measured: 0.1-0.3%).
     let h = 100e-6;
     let pulse = gaussian(20e-9, 3e-6, 1e-6, 0.3e-6, 1e3);
     let trace = |springs: bool| {

@@ -4,10 +4,7 @@
 mod common;
 use common::*;
 use trnews::accuracy::{Estimate, Verdict, T3_ORDER};
-use trnews::fem::Model;
-use trnews::laminate::{Laminate, Layer};
 use trnews::material::Material;
-use trnews::mesh::{Mesh, Side};
 use trnews::signal::Signal;
 use trnews::solve::{run, segment_receiver, traction_source, Quantity, RunConfig};
 
@@ -19,32 +16,11 @@ fn load(t: f64) -> f64 {
     (-((t - 4.0 * WIDTH) / WIDTH).powi(2)).exp()
 }
 
-/// A strip of layers (top first: material, thickness), two square elements of size h wide,
-/// rollers on the sides, absorbing bottom: a uniform top traction launches a plane P wave.
-fn strip(layers: &[(Material, f64)], h: f64) -> Model {
-    let materials = layers.iter().map(|l| l.0.clone()).collect();
-    let stack = layers
-        .iter()
-        .enumerate()
-        .rev()
-        .map(|(i, l)| Layer {
-            material: i,
-            thickness_m: l.1,
-        })
-        .collect();
-    let lam = Laminate::from_layers(materials, stack).unwrap();
-    let mesh = Mesh::layered(&lam, 2.0 * h, h, h, &[], &[]).unwrap();
-    let rollers = [Side::Left, Side::Right]
-        .iter()
-        .flat_map(|&s| mesh.side_nodes(s))
-        .map(|n| 2 * n)
-        .collect();
-    Model::build(mesh, lam.materials, &[Side::Bottom.into()], rollers, None).unwrap()
-}
-
 /// Velocity u_y at `depth` below the top for a unit-pressure Gaussian load, at 0.9 dt_crit.
 fn trace(layers: &[(Material, f64)], h: f64, depth: f64, duration: f64) -> Signal {
-    let model = strip(layers, h);
+    // Two columns, rollers on the sides, absorbing bottom: a uniform top traction launches
+    // a plane P wave.
+    let model = strip(layers, h, 2, false, BottomEdge::Absorbing);
     let (x0, x1, _, y1) = model.mesh.bounds();
     let y = y1 - depth;
     let receiver =

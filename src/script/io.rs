@@ -149,29 +149,21 @@ mod io_api {
     ) -> Res<()> {
         let file = HostContext::of(&ctx)?.resolve_output(path).at(&ctx)?;
         let headers = strings(&ctx, &headers, "headers")?;
-        let table: Vec<Vec<String>> = table
-            .iter()
-            .map(|row| {
-                row.read_lock::<Array>()
-                    .map(|r| r.iter().cloned().collect())
-                    .unwrap_or_else(|| vec![row.clone()])
-            })
-            .collect::<Vec<Vec<Dynamic>>>()
+        let cell = |i: usize, j: usize, v: &Dynamic| match v.as_float() {
+            Ok(x) if !x.is_finite() => Err(super::error(
+                &ctx,
+                format!("rows[{i}][{j}] = {x}: a non-finite number in a table"),
+            )),
+            _ => Ok(v.to_string()),
+        };
+        let table = table
             .iter()
             .enumerate()
-            .map(|(i, row)| {
-                row.iter()
-                    .enumerate()
-                    .map(|(j, v)| match v.as_float() {
-                        Ok(x) if !x.is_finite() => Err(super::error(
-                            &ctx,
-                            format!("rows[{i}][{j}] = {x}: a non-finite number in a table"),
-                        )),
-                        _ => Ok(v.to_string()),
-                    })
-                    .collect()
+            .map(|(i, row)| match row.read_lock::<Array>() {
+                Some(r) => r.iter().enumerate().map(|(j, v)| cell(i, j, v)).collect(),
+                None => Ok(vec![cell(i, 0, row)?]),
             })
-            .collect::<Res<_>>()?;
+            .collect::<Res<Vec<Vec<String>>>>()?;
         io::write_csv_rows(&file, &headers, &table).at(&ctx)
     }
 

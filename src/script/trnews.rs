@@ -50,6 +50,46 @@ pub struct ResponderOptions {
     pub error_estimate: EstimateChoice,
 }
 
+/// The companion scenes of an error estimate when `choice` asks for one: always for true,
+/// never for false, and for "auto" when they cost at most [`AUTO_ESTIMATE_MAX_COST`] extra
+/// (printing why not otherwise).
+fn companions_wanted(
+    ctx: &NativeCallContext,
+    r: &Responder,
+    choice: &EstimateChoice,
+) -> ScriptResult<Option<Vec<Arc<crate::scene::Scene>>>> {
+    use crate::script::WithPosition;
+    let word = match choice {
+        EstimateChoice::Flag(true) => "true",
+        EstimateChoice::Flag(false) => "false",
+        EstimateChoice::Word(w) => w.as_str(),
+    };
+    match word {
+        "false" => Ok(None),
+        "true" => Ok(Some(r.companion_scenes().at(ctx)?.0)),
+        "auto" => {
+            let (scenes, cost) = r.companion_scenes().at(ctx)?;
+            if cost <= AUTO_ESTIMATE_MAX_COST {
+                return Ok(Some(scenes));
+            }
+            crate::script::HostContext::of(ctx)?.print(&format!(
+                "error estimate off: the 2h and 4h companions would add {:.0}% to the run \
+                 time (auto allows {:.0}%); results carry no discretisation error \
+                 (error_estimate = true turns it on)",
+                100.0 * cost,
+                100.0 * AUTO_ESTIMATE_MAX_COST
+            ));
+            Ok(None)
+        }
+        other => Err(error(
+            ctx,
+            format!(
+                "invalid responder.error_estimate = \"{other}\": expected true, false or \"auto\""
+            ),
+        )),
+    }
+}
+
 /// A map of named estimates as Rhai values.
 fn estimate_map(entries: Vec<(&str, Estimate)>) -> Dynamic {
     entries
@@ -411,33 +451,24 @@ mod trnews_api {
         let o: ResponderOptions =
             options(&ctx, settings, &ResponderOptions::default(), "responder")?;
         let r = Responder::new(scene, duration_s).at(&ctx)?;
-        use super::EstimateChoice::{Flag, Word};
-        match &o.error_estimate {
-            Flag(false) => Ok(r),
-            Word(w) if w == "false" => Ok(r),
-            Flag(true) => r.with_error_estimate(duration_s).at(&ctx),
-            Word(w) if w == "true" => r.with_error_estimate(duration_s).at(&ctx),
-            Word(w) if w == "auto" => {
-                let (scenes, cost) = r.companion_scenes().at(&ctx)?;
-                if cost <= super::AUTO_ESTIMATE_MAX_COST {
-                    return r.with_companions(scenes, duration_s).at(&ctx);
-                }
-                crate::script::HostContext::of(&ctx)?.print(&format!(
-                    "error estimate off: the 2h and 4h companions would add {:.0}% to the run \
-                     time (auto allows {:.0}%); results carry no discretisation error \
-                     (error_estimate = true turns it on)",
-                    100.0 * cost,
-                    100.0 * super::AUTO_ESTIMATE_MAX_COST
-                ));
-                Ok(r)
-            }
-            Word(w) => Err(super::error(
-                &ctx,
-                format!(
-                    "invalid responder.error_estimate = \"{w}\": expected true, false or \"auto\""
-                ),
-            )),
+        match super::companions_wanted(&ctx, &r, &o.error_estimate)? {
+            Some(scenes) => r.with_companions(scenes, duration_s).at(&ctx),
+            None => Ok(r),
         }
+    }
+
+    /// Whether `choice` (true, false or "auto", as given to `responder`) turns the error estimate on for `r`: "auto" when the 2h and 4h companions would cost at most 15% extra (and says so when they would not). For scripts that estimate their own quantities from runs at 2h and 4h.
+    #[rhai_fn(global, return_raw)]
+    pub fn error_estimate_wanted(
+        ctx: NativeCallContext,
+        r: Responder,
+        choice: Dynamic,
+    ) -> Res<bool> {
+        let mut settings = Map::new();
+        settings.insert("error_estimate".into(), choice);
+        let o: ResponderOptions =
+            options(&ctx, settings, &ResponderOptions::default(), "responder")?;
+        Ok(super::companions_wanted(&ctx, &r, &o.error_estimate)?.is_some())
     }
 
     /// True when the responder repeats its procedures on coarser companions for error estimates.
