@@ -6,6 +6,20 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 use trnews::script::{parse_param_value, Host, HostOptions, ScriptError, DEFAULT_MAX_OPERATIONS};
 
+/// The heap, counted (live bytes and bytes allocated so far) so that the host can hold a
+/// script's memory to `--max-memory` and charge native work to `--max-operations`. No cap is
+/// set here: an allocation refused by the allocator would abort the process instead of
+/// ending the script with an error.
+#[global_allocator]
+static HEAP: cap::Cap<std::alloc::System> = cap::Cap::new(std::alloc::System, usize::MAX);
+
+fn heap_use() -> trnews::budget::HeapUse {
+    trnews::budget::HeapUse {
+        live: HEAP.allocated() as u64,
+        allocated: HEAP.total_allocated() as u64,
+    }
+}
+
 /// Run a trnews experiment script (Rhai): simulations, TR-NEWS processing, figures and data files.
 #[derive(Debug, Parser)]
 #[command(name = "trnews-script", version, about)]
@@ -25,13 +39,14 @@ struct Cli {
     /// Hide progress display (script print output is still shown).
     #[arg(long)]
     quiet: bool,
-    /// Operation budget of the script; exceeding it stops the run with an error.
+    /// Operation budget: script operations plus native work (one per KiB allocated).
     #[arg(long, default_value_t = DEFAULT_MAX_OPERATIONS)]
     max_operations: u64,
     /// Wall-clock limit of the run in seconds, native work included (default: none).
     #[arg(long, value_name = "SECONDS")]
     time_limit: Option<f64>,
-    /// Memory limit of one scene, run or signal, in GiB: larger requests are refused before allocating.
+    /// Memory limit in GiB: the script stops when its heap exceeds it; scenes, runs and signals
+    /// that would exceed it are refused before allocating.
     #[arg(long, value_name = "GIB", default_value_t = 8.0)]
     max_memory: f64,
     /// Only compile the script and report syntax errors.
@@ -61,6 +76,7 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: &Cli) -> Result<(), ScriptError> {
+    trnews::budget::install_heap_meter(heap_use);
     if let Some(n) = cli.threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)

@@ -2,10 +2,27 @@
 //! memory limit, and a seeded fuzz run over scene maps, run options, signal, plot and io calls.
 //! Every case must end in `Ok` or a one-line error at `file:line:col`: no panic, no hang past
 //! the budget, nothing written outside the output root, no non-finite file.
+//!
+//! Elapsed-time bounds here detect hangs, not speed: they are generous (30 s for work that
+//! takes ~1 s alone) because the suite runs its tests in parallel on small machines.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
+use trnews::budget::HeapUse;
 use trnews::script::{Host, HostOptions};
+
+/// The heap counted as `trnews-script` counts it, so these in-process hosts meter memory and
+/// native work the same way. The heap is the whole test process's: tests that set a small
+/// memory limit only assert that it trips.
+#[global_allocator]
+static HEAP: cap::Cap<std::alloc::System> = cap::Cap::new(std::alloc::System, usize::MAX);
+
+fn meter() {
+    trnews::budget::install_heap_meter(|| HeapUse {
+        live: HEAP.allocated() as u64,
+        allocated: HEAP.total_allocated() as u64,
+    });
+}
 
 /// A fresh directory under the system temp dir, removed on drop.
 struct Temp(PathBuf);
@@ -28,6 +45,7 @@ fn temp(tag: &str) -> Temp {
 }
 
 fn host(out: &Path, time_limit_s: f64) -> Host {
+    meter();
     Host::new(HostOptions {
         out_dir: out.to_path_buf(),
         quiet: true,
@@ -117,7 +135,7 @@ fn issue_11_reproducers_are_errors_naming_the_field() {
     assert!(files(&dir.0).is_empty(), "{:?}", files(&dir.0));
 }
 
-/// The operation limit 0 (Rhai's "unlimited") is refused; the time limit stops a quadratic loop.
+/// The operation limit 0 is refused; the time limit stops a script loop and a simulation.
 #[test]
 fn budgets_stop_runaway_scripts() {
     let dir = temp("budget");
@@ -142,19 +160,155 @@ fn budgets_stop_runaway_scripts() {
     let err = h
         .run_str("t.rhai", "let a = []; loop { a.push(a.len()); }")
         .expect_err("stops");
-    assert!(t.elapsed() < Duration::from_secs(8), "{:?}", t.elapsed());
+    assert!(t.elapsed() < Duration::from_secs(30), "{:?}", t.elapsed());
     let msg = err.to_string();
-    assert!(msg.contains("time limit") || msg.contains("array"), "{msg}");
+    assert!(msg.contains("time limit"), "{msg}");
     // native work: a long simulation stops at the time limit too
     let t = Instant::now();
     let err = h
         .run_str(
             "t.rhai",
-            "let s = scene::preset(\"smoke\", #{crack: ()}); s.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{duration_s: 1e-2});",
+            "let s = scene::preset(\"smoke\", #{crack: ()}); s.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{duration_s: 1e-3});",
         )
         .expect_err("stops");
     assert!(err.to_string().contains("time limit"), "{err}");
-    assert!(t.elapsed() < Duration::from_secs(8), "{:?}", t.elapsed());
+    assert!(t.elapsed() < Duration::from_secs(30), "{:?}", t.elapsed());
+}
+
+/// Without a time limit, native work counts against the operation budget and script values
+/// against the memory limit: the issue's "1000 envelopes of a 4M-sample signal" with a budget
+/// of 100,000 (previously past 60 s) and an array grown by `push` (previously quadratic, so
+/// that no limit tripped) both stop with an error naming the limit.
+#[test]
+fn native_work_and_script_values_are_metered() {
+    meter();
+    let dir = temp("meter");
+    let h = Host::new(HostOptions {
+        out_dir: dir.0.clone(),
+        quiet: true,
+        max_operations: 100_000,
+        ..HostOptions::default()
+    })
+    .expect("host");
+    let t = Instant::now();
+    let err = h
+        .run_str(
+            "t.rhai",
+            "let s = signal::zeros(1e-8, 0.0, 4000000);\nfor i in 0..1000 { let e = s.envelope(); }",
+        )
+        .expect_err("stops")
+        .to_string();
+    assert!(
+        err.starts_with("t.rhai:2:") && err.contains("operation limit 100000 exceeded"),
+        "{err}"
+    );
+    assert!(err.contains("KiB allocated"), "{err}");
+    // one envelope allocates ~300 MiB: the budget trips after the first
+    assert!(t.elapsed() < Duration::from_secs(30), "{:?}", t.elapsed());
+
+    let h = Host::new(HostOptions {
+        out_dir: dir.0.clone(),
+        quiet: true,
+        max_memory: 256 << 20,
+        ..HostOptions::default()
+    })
+    .expect("host");
+    let t = Instant::now();
+    let err = h
+        .run_str("t.rhai", "let a = [];\nloop { a.push(a.len()); }")
+        .expect_err("stops")
+        .to_string();
+    assert!(
+        err.starts_with("t.rhai:2:") && err.contains("above the limit of 256.000 MiB"),
+        "{err}"
+    );
+    // 16 M pushes at ~0.4 us each
+    assert!(t.elapsed() < Duration::from_secs(60), "{:?}", t.elapsed());
+    trnews::budget::set_memory_limit(trnews::budget::DEFAULT_MEMORY_LIMIT);
+}
+
+/// A panic in a native function (none of the built-in ones is known to panic; this one is
+/// registered to) ends the script with a one-line error naming the script and the Rust
+/// location, and the host stays usable.
+#[test]
+fn a_panic_in_native_code_is_an_error() {
+    let dir = temp("panic");
+    let mut h = host(&dir.0, 20.0);
+    let mut module = rhai::Module::new();
+    module.set_native_fn("explode", || -> Result<(), Box<rhai::EvalAltResult>> {
+        panic!("deliberate")
+    });
+    h.register_module("embedded", module);
+    let err = h
+        .run_str("t.rhai", "let x = 1;\nembedded::explode();")
+        .expect_err("caught")
+        .to_string();
+    assert!(
+        err.starts_with(
+            "t.rhai: internal error (a bug, please report it): deliberate at tests/hostile.rs:"
+        ),
+        "{err}"
+    );
+    h.run_str("t.rhai", "let x = 1 + 1;")
+        .expect("host still usable");
+}
+
+/// Ctrl-C (SIGINT) stops a script loop and a native simulation cleanly: exit status 1, an
+/// "interrupted" error at the script position, nothing written after the interrupted call.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_stops_scripts_and_native_runs() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let dir = temp("sigint");
+    let cases = [
+        (
+            "loop.rhai",
+            "print(\"ready\");\nlet x = 0;\nloop { x += 1; }",
+        ),
+        (
+            "native.rhai",
+            "let s = scene::preset(\"smoke\", #{crack: ()});\nprint(\"ready\");\n\
+             let r = s.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{duration_s: 1e-3});\n\
+             io::write_csv(\"after.csv\", [\"t\"], [[1.0]]);",
+        ),
+    ];
+    for (name, script) in cases {
+        let path = dir.0.join(name);
+        std::fs::write(&path, script).expect("script");
+        let out = dir.0.join(format!("out-{name}"));
+        let mut child = Command::new(env!("CARGO_BIN_EXE_trnews-script"))
+            .args(["--quiet", "--out"])
+            .arg(&out)
+            .arg(&path)
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("spawn");
+        let mut lines = BufReader::new(child.stderr.take().expect("stderr")).lines();
+        let first = lines.next().expect("a line").expect("text");
+        assert!(first.contains("ready"), "{first}");
+        std::thread::sleep(Duration::from_millis(500));
+        let t = Instant::now();
+        let killed = Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .expect("kill");
+        assert!(killed.success());
+        let rest: Vec<String> = lines.map_while(Result::ok).collect();
+        let status = child.wait().expect("wait");
+        assert!(
+            t.elapsed() < Duration::from_secs(30),
+            "{name}: {:?}",
+            t.elapsed()
+        );
+        assert_eq!(status.code(), Some(1), "{name}: {rest:?}");
+        let message = rest.join("\n");
+        assert!(
+            message.contains(&format!("{name}:3:")) && message.contains("interrupted (Ctrl-C)"),
+            "{name}: {message}"
+        );
+        assert!(files(&out).is_empty(), "{name}: {:?}", files(&out));
+    }
 }
 
 /// A scene above the memory limit is refused in under a second, with the estimate.

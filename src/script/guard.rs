@@ -28,7 +28,7 @@ pub fn reset() {
                 if let Ok(mut l) = LOCATION.lock() {
                     *l = info
                         .location()
-                        .map(|l| format!("{}:{}", l.file(), l.line()));
+                        .map(|l| format!("{}:{}:{}", l.file(), l.line(), l.column()));
                 }
             } else {
                 previous(info);

@@ -57,16 +57,11 @@ const MODULES: &[(&str, ModuleBuilder)] = &[
     ("host", host::module),
 ];
 
-/// Default operation budget of a script run (`--max-operations`).
+/// Default operation budget of a script run (`--max-operations`): script operations plus
+/// native work at one operation per KiB allocated (see [`crate::budget::check_script`]).
 pub const DEFAULT_MAX_OPERATIONS: u64 = 1_000_000_000;
 /// Deepest script function call nesting allowed.
 pub const MAX_CALL_LEVELS: usize = 64;
-/// Largest string a script may build (bytes).
-pub const MAX_STRING_SIZE: usize = 1 << 24;
-/// Largest Rhai array a script may build (large data belongs in a `Signal`).
-pub const MAX_ARRAY_SIZE: usize = 1 << 24;
-/// Largest object map a script may build.
-pub const MAX_MAP_SIZE: usize = 1 << 16;
 
 /// How a [`Host`] is set up.
 #[derive(Clone, Debug)]
@@ -75,13 +70,15 @@ pub struct HostOptions {
     pub out_dir: PathBuf,
     /// `--set NAME=VALUE` parameters: readable with `param(name, default)` and as constants.
     pub params: BTreeMap<String, Dynamic>,
-    /// Operation budget; a script exceeding it stops with an error naming the limit.
+    /// Operation budget (script operations plus native work, one per KiB allocated); a script
+    /// exceeding it stops with an error naming the limit.
     pub max_operations: u64,
     /// Hide progress display (script `print` output is still shown).
     pub quiet: bool,
     /// Wall-clock limit of a script run, native work included (`--time-limit`); `None`: none.
     pub time_limit: Option<Duration>,
-    /// Memory limit of one request (a scene, a run, a signal) in bytes (`--max-memory`).
+    /// Memory limit in bytes (`--max-memory`): the live heap of the run, when the process
+    /// meters its heap, and every request's estimate (a scene, a run, a signal) on top of it.
     pub max_memory: u64,
 }
 
@@ -254,7 +251,6 @@ impl HostContext {
 pub struct Host {
     engine: Engine,
     context: Arc<HostContext>,
-    max_operations: u64,
     time_limit: Option<Duration>,
     max_memory: u64,
 }
@@ -266,7 +262,7 @@ impl Host {
             check_param_name(name).map_err(|m| ScriptError::new("--set", m))?;
         }
         if options.max_operations == 0 {
-            // Rhai reads 0 as "unlimited": refuse it rather than drop the limit silently.
+            // 0 would stop every script at its first operation; "unlimited" is not offered.
             return Err(ScriptError::new(
                 "--max-operations",
                 "0 is not a limit; give a positive operation budget",
@@ -303,15 +299,20 @@ impl Host {
         Ok(Host {
             engine,
             context,
-            max_operations: options.max_operations,
             time_limit: options.time_limit,
             max_memory: options.max_memory,
         })
     }
 
-    /// The underlying engine (for metadata, or to register extra modules in tests).
+    /// The underlying engine (for metadata).
     pub fn engine(&self) -> &Engine {
         &self.engine
+    }
+
+    /// Adds a module of an embedding application's own functions under `name`; the sandbox,
+    /// the budgets and the panic guard apply to them as to the built-in modules.
+    pub fn register_module(&mut self, name: &str, module: Module) {
+        self.engine.register_static_module(name, module.into());
     }
 
     /// Compiles the script at `path` without running it.
@@ -403,10 +404,6 @@ impl Host {
         let base = match inner {
             EvalAltResult::ErrorRuntime(value, _) => value.to_string(),
             EvalAltResult::ErrorTerminated(token, _) => token.to_string(),
-            EvalAltResult::ErrorTooManyOperations(_) => format!(
-                "operation limit {} exceeded (endless loop? raise it with --max-operations)",
-                self.max_operations
-            ),
             EvalAltResult::ErrorStackOverflow(_) => {
                 format!("call depth limit {MAX_CALL_LEVELS} exceeded (runaway recursion?)")
             }
@@ -466,21 +463,21 @@ fn called_functions(err: &EvalAltResult) -> Vec<String> {
 
 /// The sandboxed engine: limits, no `import` of files, no `eval` (its errors would have no
 /// file position), print and debug routed to stderr.
+///
+/// Operations, memory, time and Ctrl-C are checked by the host between operations
+/// ([`crate::budget::check_script`]), not by Rhai's own limits: Rhai's size limits on strings,
+/// arrays and maps walk the whole value after each change (building an array by `push`
+/// becomes quadratic, so no limit ever trips), and its operation count cannot include native
+/// work. The live heap covers every script value instead.
 fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
     let mut engine = Engine::new();
     engine
-        .set_max_operations(max_operations)
         .set_max_call_levels(MAX_CALL_LEVELS)
-        .set_max_string_size(MAX_STRING_SIZE)
-        .set_max_array_size(MAX_ARRAY_SIZE)
-        .set_max_map_size(MAX_MAP_SIZE)
         .set_module_resolver(DummyModuleResolver::new())
         .set_default_tag(Dynamic::from(Arc::clone(context)))
         .disable_symbol("eval");
-    // The time limit and Ctrl-C, checked between operations (native calls check them too,
-    // in their long loops: see `crate::budget`).
-    engine.on_progress(|_| {
-        crate::budget::check()
+    engine.on_progress(move |operations| {
+        crate::budget::check_script(operations, max_operations)
             .err()
             .map(|stop| Dynamic::from(stop.to_string()))
     });
