@@ -237,12 +237,12 @@ pub fn check_memory(
     }
     let estimate = if in_use > 0.0 {
         format!(
-            "{} on top of {} in use",
+            "{} of memory on top of {} in use",
             format_bytes(bytes),
             format_bytes(in_use)
         )
     } else {
-        format_bytes(bytes)
+        format!("{} of memory", format_bytes(bytes))
     };
     Err(crate::Error::TooLarge {
         field: field.to_string(),

@@ -55,13 +55,13 @@ pub enum Error {
     #[error("stopped: {0}")]
     Stopped(crate::budget::Stop),
     /// The estimated memory of a request exceeds the limit (see [`crate::scene::memory_limit`]).
-    #[error("{field} = {value} would need about {estimate} of memory, above the limit of {limit} (set with --max-memory); {hint}")]
+    #[error("{field} = {value} would need about {estimate}, above the limit of {limit} (set with --max-memory); {hint}")]
     TooLarge {
         /// The field the user wrote.
         field: String,
         /// Its value.
         value: String,
-        /// The estimate, formatted (e.g. "12.3 GiB").
+        /// The estimate, formatted (e.g. "12.3 GiB of memory", with the heap in use if metered).
         estimate: String,
         /// The limit, formatted.
         limit: String,

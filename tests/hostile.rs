@@ -8,21 +8,7 @@
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-use trnews::budget::HeapUse;
 use trnews::script::{Host, HostOptions};
-
-/// The heap counted as `trnews-script` counts it, so these in-process hosts meter memory and
-/// native work the same way. The heap is the whole test process's: tests that set a small
-/// memory limit only assert that it trips.
-#[global_allocator]
-static HEAP: cap::Cap<std::alloc::System> = cap::Cap::new(std::alloc::System, usize::MAX);
-
-fn meter() {
-    trnews::budget::install_heap_meter(|| HeapUse {
-        live: HEAP.allocated() as u64,
-        allocated: HEAP.total_allocated() as u64,
-    });
-}
 
 /// A fresh directory under the system temp dir, removed on drop.
 struct Temp(PathBuf);
@@ -45,7 +31,6 @@ fn temp(tag: &str) -> Temp {
 }
 
 fn host(out: &Path, time_limit_s: f64) -> Host {
-    meter();
     Host::new(HostOptions {
         out_dir: out.to_path_buf(),
         quiet: true,
@@ -175,56 +160,66 @@ fn budgets_stop_runaway_scripts() {
     assert!(t.elapsed() < Duration::from_secs(30), "{:?}", t.elapsed());
 }
 
+/// Runs `trnews-script` with `args` on `script` (written to `dir`); returns the error text
+/// and the elapsed time. The binary meters its own heap (the in-process hosts of the other
+/// tests share one process and so one heap, which would blur a heap limit).
+fn run_binary(dir: &Path, script: &str, args: &[&str]) -> (String, Duration) {
+    let path = dir.join("t.rhai");
+    std::fs::write(&path, script).expect("script");
+    let t = Instant::now();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_trnews-script"))
+        .args(["--quiet", "--out"])
+        .arg(dir.join("out"))
+        .args(args)
+        .arg(&path)
+        .output()
+        .expect("run");
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    (
+        String::from_utf8_lossy(&out.stderr).trim().to_string(),
+        t.elapsed(),
+    )
+}
+
 /// Without a time limit, native work counts against the operation budget and script values
 /// against the memory limit: the "1000 envelopes of a 4M-sample signal" with a budget
 /// of 100,000 (previously past 60 s) and an array grown by `push` (previously quadratic, so
-/// that no limit tripped) both stop with an error naming the limit.
+/// that no limit tripped) both stop with an error naming the limit, at the script position.
 #[test]
 fn native_work_and_script_values_are_metered() {
-    meter();
     let dir = temp("meter");
-    let h = Host::new(HostOptions {
-        out_dir: dir.0.clone(),
-        quiet: true,
-        max_operations: 100_000,
-        ..HostOptions::default()
-    })
-    .expect("host");
-    let t = Instant::now();
-    let err = h
-        .run_str(
-            "t.rhai",
-            "let s = signal::zeros(1e-8, 0.0, 4000000);\nfor i in 0..1000 { let e = s.envelope(); }",
-        )
-        .expect_err("stops")
-        .to_string();
+    let (err, elapsed) = run_binary(
+        &dir.0,
+        "let s = signal::zeros(1e-8, 0.0, 4000000);\nfor i in 0..1000 { let e = s.envelope(); }",
+        &["--max-operations", "100000"],
+    );
     assert!(
-        err.starts_with("t.rhai:2:") && err.contains("operation limit 100000 exceeded"),
+        err.contains("t.rhai:2:") && err.contains("operation limit 100000 exceeded"),
         "{err}"
     );
     assert!(err.contains("KiB allocated"), "{err}");
     // one envelope allocates ~300 MiB: the budget trips after the first
-    assert!(t.elapsed() < Duration::from_secs(30), "{:?}", t.elapsed());
+    assert!(elapsed < Duration::from_secs(30), "{elapsed:?}");
 
-    let h = Host::new(HostOptions {
-        out_dir: dir.0.clone(),
-        quiet: true,
-        max_memory: 256 << 20,
-        ..HostOptions::default()
-    })
-    .expect("host");
-    let t = Instant::now();
-    let err = h
-        .run_str("t.rhai", "let a = [];\nloop { a.push(a.len()); }")
-        .expect_err("stops")
-        .to_string();
+    let (err, elapsed) = run_binary(
+        &dir.0,
+        "let a = [];\nloop { a.push(a.len()); }",
+        &["--max-memory", "0.25"],
+    );
     assert!(
-        err.starts_with("t.rhai:2:") && err.contains("above the limit of 256.000 MiB"),
+        err.contains("t.rhai:2:") && err.contains("above the limit of 256.000 MiB"),
         "{err}"
     );
     // 16 M pushes at ~0.4 us each
-    assert!(t.elapsed() < Duration::from_secs(60), "{:?}", t.elapsed());
-    trnews::budget::set_memory_limit(trnews::budget::DEFAULT_MEMORY_LIMIT);
+    assert!(elapsed < Duration::from_secs(60), "{elapsed:?}");
+
+    // a request is refused on top of what the script holds: 200 MiB held, a 100 MiB signal asked
+    let (err, _) = run_binary(
+        &dir.0,
+        "let held = signal::zeros(1e-8, 0.0, 26000000);\nlet more = signal::zeros(1e-8, 0.0, 13000000);",
+        &["--max-memory", "0.25"],
+    );
+    assert!(err.contains("t.rhai:2:") && err.contains("in use"), "{err}");
 }
 
 /// A panic in a native function (none of the built-in ones is known to panic; this one is

@@ -2,7 +2,7 @@
 
 use std::f64::consts::PI;
 
-use super::{check_len, finite, positive_finite, Signal, SignalError, GRID_TOL};
+use super::{check_alloc, finite, positive_finite, Signal, SignalError, GRID_TOL};
 
 /// Linear chirp from `f0_hz` to `f1_hz` over `[0, t1_s]`, zero after, sampled at
 /// `t_k = k dt_s` for `k < round(total_s / dt_s)`:
@@ -43,7 +43,7 @@ pub fn chirp(
         });
     }
     let n = (total_s / dt_s).round();
-    check_len("chirp", n)?;
+    check_alloc("chirp", n)?;
     let ramp_s = 0.5 * taper_fraction * t1_s;
     let t_last = t1_s + GRID_TOL * dt_s;
     let samples = (0..n as usize)

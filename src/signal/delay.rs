@@ -3,7 +3,7 @@
 use rustfft::num_complex::Complex;
 
 use super::fft::{fast_len, forward_real, inverse_real, signed_bin};
-use super::{check_len, finite, require_len, Signal, SignalError, GRID_TOL};
+use super::{check_alloc, finite, require_len, Signal, SignalError, GRID_TOL};
 
 /// Extra zero padding (samples) beyond the content, so band-limited shift
 /// tails do not wrap around the FFT buffer into the output.
@@ -69,7 +69,7 @@ pub fn delay_and_sum(
     let m0 = (in_samples.iter().fold(f64::INFINITY, |m, &d| m.min(d)) + GRID_TOL).floor();
     let rel: Vec<f64> = in_samples.iter().map(|d| snap(d - m0)).collect();
     let extra = rel.iter().fold(0.0f64, |m, &d| m.max(d.ceil()));
-    check_len("delayed signal", s.len() as f64 + extra)?;
+    check_alloc("delayed signal", s.len() as f64 + extra)?;
     let out_len = s.len() + extra as usize;
     let terms: Vec<(f64, f64)> = amplitudes.iter().copied().zip(rel).collect();
     let samples = if terms.iter().all(|&(_, d)| d.fract() == 0.0) {

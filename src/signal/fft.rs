@@ -3,7 +3,7 @@
 use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;
 
-use super::{check_len, finite, require_len, same_dt, Signal, SignalError, GRID_TOL};
+use super::{check_alloc, finite, require_len, same_dt, Signal, SignalError, GRID_TOL};
 
 /// Kernels shorter than this are convolved by the direct sum.
 const DIRECT_CONVOLUTION_MAX: usize = 64;
@@ -99,7 +99,7 @@ pub fn xcorr(
             end_s: lag_max_s,
         });
     }
-    check_len("lag window", m_hi - m_lo + 1.0)?;
+    check_alloc("lag window", m_hi - m_lo + 1.0)?;
     let (ny, nc) = (y.len() as i64, c.len() as i64);
     let len = fast_len((ny + nc - 1) as usize);
     let yk = forward_real(&y.samples, len);
@@ -145,7 +145,7 @@ pub fn convolve_discrete(a: &Signal, b: &Signal) -> Result<Signal, SignalError> 
     same_dt(a.dt_s, b.dt_s)?;
     require_len("a", a.len(), 1)?;
     require_len("b", b.len(), 1)?;
-    check_len("convolution", (a.len() + b.len()) as f64)?;
+    check_alloc("convolution", (a.len() + b.len()) as f64)?;
     Ok(Signal {
         dt_s: a.dt_s,
         t0_s: a.t0_s + b.t0_s,

@@ -87,6 +87,9 @@ pub enum SignalError {
         len: f64,
         max: usize,
     },
+    /// An output would not fit in the memory limit (see [`crate::budget::check_memory`]).
+    #[error("{0}")]
+    OverMemory(String),
     /// Two parallel inputs have different lengths.
     #[error("length mismatch: {name_a} has {len_a} entries vs {name_b} has {len_b}")]
     LengthMismatch {
@@ -148,7 +151,7 @@ impl Signal {
 
     /// `n` zero samples starting at `t0_s`.
     pub fn zeros(dt_s: f64, t0_s: f64, n: usize) -> Result<Self, SignalError> {
-        check_len("n", n as f64)?;
+        check_alloc("n", n as f64)?;
         Self::new(dt_s, t0_s, vec![0.0; n])
     }
 
@@ -245,7 +248,7 @@ impl Signal {
         }
         let start = offset.min(0);
         let end = (self.len() as i64).max(offset + other.len() as i64);
-        check_len("sum", (end - start) as f64)?;
+        check_alloc("sum", (end - start) as f64)?;
         let mut samples = vec![0.0; (end - start) as usize];
         let a0 = (-start) as usize;
         let b0 = (offset - start) as usize;
@@ -307,7 +310,7 @@ impl Signal {
                 value: n as f64,
             });
         }
-        check_len("n", n as f64)?;
+        check_alloc("n", n as f64)?;
         let mut samples = self.samples.clone();
         samples.resize(n, 0.0);
         Ok(Signal { samples, ..*self })
@@ -350,7 +353,7 @@ fn grid_offset(a: &Signal, b: &Signal) -> Result<i64, SignalError> {
             offset_samples: x,
         });
     }
-    check_len("grid offset", m.abs())?;
+    check_alloc("grid offset", m.abs())?;
     Ok(m as i64)
 }
 
@@ -386,6 +389,15 @@ fn check_len(name: &'static str, len: f64) -> Result<(), SignalError> {
         });
     }
     Ok(())
+}
+
+/// [`check_len`] for an output about to be allocated, which must also fit in the memory limit
+/// on top of the heap in use.
+fn check_alloc(name: &'static str, len: f64) -> Result<(), SignalError> {
+    check_len(name, len)?;
+    let bytes = len * std::mem::size_of::<f64>() as f64;
+    crate::budget::check_memory(name, format!("{len} samples"), bytes, "use fewer samples")
+        .map_err(|e| SignalError::OverMemory(e.to_string()))
 }
 
 /// Errors if a signal has fewer than `min` samples.

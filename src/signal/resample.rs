@@ -4,7 +4,7 @@ use std::f64::consts::PI;
 
 use rustfft::num_complex::Complex;
 
-use super::{check_len, positive_finite, same_dt, Signal, SignalError, GRID_TOL};
+use super::{check_alloc, positive_finite, same_dt, Signal, SignalError, GRID_TOL};
 
 /// Kernel half-width in zero crossings of the sinc (taps of the coarser grid).
 const HALF_WIDTH: usize = 32;
@@ -34,7 +34,7 @@ pub fn resample(s: &Signal, new_dt_s: f64) -> Result<Signal, SignalError> {
         });
     }
     let n_out = ((s.t_end_s() - s.t0_s) / new_dt_s + GRID_TOL).floor() + 1.0;
-    check_len("resampled signal", n_out)?;
+    check_alloc("resampled signal", n_out)?;
     let kernel = Kernel::new(s.dt_s.max(new_dt_s));
     let samples = (0..n_out as usize)
         .map(|j| kernel.interpolate(s, j as f64 * new_dt_s))
