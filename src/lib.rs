@@ -19,6 +19,7 @@ pub mod mesh;
 pub mod plot;
 pub mod scene;
 pub mod script;
+pub mod sem;
 pub mod signal;
 pub mod solve;
 pub mod study;

@@ -49,21 +49,31 @@ fn element_bound(model: &Model) -> f64 {
     2.0 / omega2.sqrt()
 }
 
-/// Largest eigenvalue of the symmetric A = M^-1/2 K M^-1/2 over the free DOFs (fixed DOFs
-/// removed) by Lanczos: the largest Ritz value of the tridiagonal T_k, a lower bound of
-/// lambda_max that converges quickly. Returns it and the iterations used.
+/// Largest eigenvalue of the T3 model's M^-1 K over its free DOFs, see [`lanczos_max_eigenvalue_of`].
 fn lanczos_max_eigenvalue(model: &Model) -> (f64, usize) {
-    let n = model.dofs();
-    let inv_sqrt_m: Vec<f64> = model.lumped_mass.iter().map(|m| 1.0 / m.sqrt()).collect();
-    let mut free = vec![true; n];
+    let mut free = vec![true; model.dofs()];
     for &d in &model.fixed_dofs {
         free[d] = false;
     }
+    lanczos_max_eigenvalue_of(&model.lumped_mass, &free, |x, y| model.stiffness.mul(x, y))
+}
+
+/// Largest eigenvalue of the symmetric A = M^-1/2 K M^-1/2 over the `free` DOFs, for a
+/// diagonal `mass` and `stiffness(x, y)` computing y = K x, by Lanczos: the largest Ritz
+/// value of the tridiagonal T_k, a lower bound of lambda_max that converges quickly.
+/// Returns it and the iterations used.
+pub(crate) fn lanczos_max_eigenvalue_of(
+    mass: &[f64],
+    free: &[bool],
+    stiffness: impl Fn(&[f64], &mut [f64]),
+) -> (f64, usize) {
+    let n = mass.len();
+    let inv_sqrt_m: Vec<f64> = mass.iter().map(|m| 1.0 / m.sqrt()).collect();
     let apply = |x: &[f64], scaled: &mut [f64], y: &mut [f64]| {
         for i in 0..n {
             scaled[i] = x[i] * inv_sqrt_m[i];
         }
-        model.stiffness.mul(scaled, y);
+        stiffness(scaled, y);
         for i in 0..n {
             y[i] = if free[i] { y[i] * inv_sqrt_m[i] } else { 0.0 };
         }

@@ -1,0 +1,324 @@
+//! Spectral elements on the layered rectangle (Patera 1984; Komatitsch and Vilotte 1998, as
+//! in SPECFEM2D and SEM2DPACK): rectangular elements aligned with the layers, tensor-product
+//! Lagrange polynomials on Gauss-Lobatto-Legendre (GLL) points, GLL quadrature, hence an
+//! exactly diagonal mass, and the stiffness applied matrix-free by sum factorisation.
+//!
+//! The polynomial order along x is one for the whole grid; the order across y is chosen per
+//! element row, so thin layers can take a low order (and do not shrink the time step) while
+//! thick ones take a high one. The mesh stays conforming: a horizontal element edge carries
+//! only the x-direction GLL points, the same in the rows above and below it, and the elements
+//! of one row share their vertical edges' y-points.
+//!
+//! The nodes form a tensor grid: node (i, j) sits at `(x_nodes_m[i], y_nodes_m[j])`, index
+//! `j * nx + i`, DOFs `2 * node + component` (as the T3 mesh numbers them).
+
+pub mod gll;
+
+use crate::error::{Error, Result};
+use crate::material::Material;
+use gll::Gll;
+use rayon::prelude::*;
+
+/// The layered rectangle as spectral elements: element lines, orders, materials, nodes and
+/// the diagonal GLL mass.
+#[derive(Clone, Debug)]
+pub struct SemModel {
+    /// Element column lines (x, m), ascending.
+    pub columns_m: Vec<f64>,
+    /// Element row lines (y, m), ascending.
+    pub rows_m: Vec<f64>,
+    /// x coordinates of the node columns.
+    pub x_nodes_m: Vec<f64>,
+    /// y coordinates of the node rows.
+    pub y_nodes_m: Vec<f64>,
+    /// Plane materials.
+    pub materials: Vec<Material>,
+    /// Material of each element row (index into `materials`).
+    pub row_material: Vec<usize>,
+    /// Diagonal mass per DOF, M_kk = sum over elements of rho w_a w_b J (kg).
+    pub lumped_mass: Vec<f64>,
+    gll_x: Gll,
+    /// GLL rule of each element row (its order across y).
+    gll_y: Vec<Gll>,
+    /// First node row of each element row.
+    first_line: Vec<usize>,
+}
+
+/// Scratch of [`SemModel::stiffness_times`], allocated once per model size: per element row,
+/// the forces on its node rows and the weighted stresses of one element.
+#[derive(Clone, Debug)]
+pub struct SemWorkspace {
+    rows: Vec<RowWork>,
+}
+
+#[derive(Clone, Debug)]
+struct RowWork {
+    /// Forces on the row's node lines, `(order_y + 1) * nx * 2`.
+    force: Vec<f64>,
+    /// Weighted stresses W sigma_xx, W sigma_yy, W sigma_xy at the element's GLL points.
+    stress: [Vec<f64>; 3],
+}
+
+impl SemModel {
+    /// Spectral elements between `columns_m` and `rows_m` (ascending lines), order `order_x`
+    /// along x and `order_y[r]` across element row r, material `row_material[r]` of
+    /// `materials` in row r.
+    pub fn new(
+        columns_m: Vec<f64>,
+        rows_m: Vec<f64>,
+        order_x: usize,
+        order_y: &[usize],
+        materials: Vec<Material>,
+        row_material: Vec<usize>,
+    ) -> Result<SemModel> {
+        check_lines("columns_m", &columns_m)?;
+        check_lines("rows_m", &rows_m)?;
+        let n_rows = rows_m.len() - 1;
+        if order_y.len() != n_rows || row_material.len() != n_rows {
+            return Err(Error::invalid(
+                "order_y",
+                format!("{} orders, {} materials", order_y.len(), row_material.len()),
+                format!("needs one per element row ({n_rows})"),
+            ));
+        }
+        for (name, &order) in
+            std::iter::once(("order_x", &order_x)).chain(order_y.iter().map(|o| ("order_y", o)))
+        {
+            if !(1..=MAX_ORDER).contains(&order) {
+                return Err(Error::invalid(
+                    name,
+                    order,
+                    format!("must be 1..={MAX_ORDER}"),
+                ));
+            }
+        }
+        if let Some(&m) = row_material.iter().find(|&&m| m >= materials.len()) {
+            return Err(Error::invalid("row_material", m, "no such material"));
+        }
+        let gll_x = Gll::new(order_x);
+        let gll_y: Vec<Gll> = order_y.iter().map(|&o| Gll::new(o)).collect();
+        let x_nodes_m = node_lines(&columns_m, |_| &gll_x);
+        let y_nodes_m = node_lines(&rows_m, |r| &gll_y[r]);
+        let mut first_line = Vec::with_capacity(n_rows);
+        let mut line = 0;
+        for g in &gll_y {
+            first_line.push(line);
+            line += g.order();
+        }
+        let mut model = SemModel {
+            columns_m,
+            rows_m,
+            x_nodes_m,
+            y_nodes_m,
+            materials,
+            row_material,
+            lumped_mass: Vec::new(),
+            gll_x,
+            gll_y,
+            first_line,
+        };
+        model.lumped_mass = model.assemble_mass();
+        Ok(model)
+    }
+
+    /// Number of node columns.
+    pub fn nx(&self) -> usize {
+        self.x_nodes_m.len()
+    }
+
+    /// Number of degrees of freedom (2 per node).
+    pub fn dofs(&self) -> usize {
+        2 * self.x_nodes_m.len() * self.y_nodes_m.len()
+    }
+
+    /// Node index of node column `i`, node row `j`.
+    pub fn node(&self, i: usize, j: usize) -> usize {
+        j * self.nx() + i
+    }
+
+    /// Scratch for [`SemModel::stiffness_times`].
+    pub fn workspace(&self) -> SemWorkspace {
+        let px = self.gll_x.order();
+        let rows = self
+            .gll_y
+            .iter()
+            .map(|g| {
+                let points = (px + 1) * (g.order() + 1);
+                RowWork {
+                    force: vec![0.0; (g.order() + 1) * self.nx() * 2],
+                    stress: [vec![0.0; points], vec![0.0; points], vec![0.0; points]],
+                }
+            })
+            .collect();
+        SemWorkspace { rows }
+    }
+
+    /// The diagonal mass: rho w_a w_b (h_x / 2) (h_y / 2) at each element's GLL point (a, b),
+    /// summed where elements share a node; the same for both components.
+    fn assemble_mass(&self) -> Vec<f64> {
+        let mut mass = vec![0.0; self.dofs()];
+        let px = self.gll_x.order();
+        for (r, gy) in self.gll_y.iter().enumerate() {
+            let rho = self.materials[self.row_material[r]].density_kg_m3;
+            let jy = 0.5 * (self.rows_m[r + 1] - self.rows_m[r]);
+            for c in 0..self.columns_m.len() - 1 {
+                let jx = 0.5 * (self.columns_m[c + 1] - self.columns_m[c]);
+                for b in 0..=gy.order() {
+                    for a in 0..=px {
+                        let node = self.node(c * px + a, self.first_line[r] + b);
+                        let m = rho * self.gll_x.weights[a] * gy.weights[b] * jx * jy;
+                        mass[2 * node] += m;
+                        mass[2 * node + 1] += m;
+                    }
+                }
+            }
+        }
+        mass
+    }
+
+    /// `out = K u`, the internal forces f_k = sum_e int B_k^T C B u dA with GLL quadrature,
+    /// by sum factorisation: gradients at the GLL points from the 1-D derivative matrices
+    /// (O(p^3) per element), stresses sigma = C eps, then the transposed derivatives.
+    /// Element rows run in parallel into their own force lines; node rows then gather from
+    /// the one or two element rows that hold them, in a fixed order (bit-identical for any
+    /// thread count). Allocates nothing.
+    pub fn stiffness_times(&self, u: &[f64], out: &mut [f64], work: &mut SemWorkspace) {
+        assert_eq!(u.len(), self.dofs());
+        assert_eq!(out.len(), self.dofs());
+        work.rows
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(r, row)| self.row_forces(r, u, row));
+        let nx = self.nx();
+        let rows = &work.rows;
+        out.par_chunks_mut(2 * nx)
+            .enumerate()
+            .for_each(|(j, line)| {
+                // the element row whose lines start at or below j, and its local line
+                let r = self.first_line.partition_point(|&f| f <= j) - 1;
+                let b = j - self.first_line[r];
+                let own = &rows[r].force[b * 2 * nx..(b + 1) * 2 * nx];
+                line.copy_from_slice(own);
+                if b == 0 && r > 0 {
+                    let below = self.gll_y[r - 1].order();
+                    let lower = &rows[r - 1].force[below * 2 * nx..(below + 1) * 2 * nx];
+                    for (o, l) in line.iter_mut().zip(lower) {
+                        *o += l;
+                    }
+                }
+            });
+    }
+
+    /// Forces of element row `r` on its own node lines.
+    fn row_forces(&self, r: usize, u: &[f64], row: &mut RowWork) {
+        row.force.fill(0.0);
+        for c in 0..self.columns_m.len() - 1 {
+            self.element_forces(r, c, u, row);
+        }
+    }
+
+    /// One element's weighted stresses at its GLL points, then its forces added to the row.
+    fn element_forces(&self, r: usize, c: usize, u: &[f64], row: &mut RowWork) {
+        let (gx, gy) = (&self.gll_x, &self.gll_y[r]);
+        let (px, py) = (gx.order(), gy.order());
+        let nx = self.nx();
+        let jx = 0.5 * (self.columns_m[c + 1] - self.columns_m[c]);
+        let jy = 0.5 * (self.rows_m[r + 1] - self.rows_m[r]);
+        let cm = &self.materials[self.row_material[r]].stiffness_pa;
+        let (i0, j0) = (c * px, self.first_line[r]);
+        let at = |a: usize, b: usize, comp: usize| u[2 * ((j0 + b) * nx + i0 + a) + comp];
+        let [sxx, syy, sxy] = &mut row.stress;
+        for b in 0..=py {
+            for a in 0..=px {
+                let (mut dux_dxi, mut duy_dxi, mut dux_deta, mut duy_deta) = (0.0, 0.0, 0.0, 0.0);
+                for k in 0..=px {
+                    let d = gx.derivative[a][k];
+                    dux_dxi += d * at(k, b, 0);
+                    duy_dxi += d * at(k, b, 1);
+                }
+                for k in 0..=py {
+                    let d = gy.derivative[b][k];
+                    dux_deta += d * at(a, k, 0);
+                    duy_deta += d * at(a, k, 1);
+                }
+                let strain = [dux_dxi / jx, duy_deta / jy, dux_deta / jy + duy_dxi / jx];
+                let w = gx.weights[a] * gy.weights[b] * jx * jy;
+                let p = b * (px + 1) + a;
+                sxx[p] = w * dot3(&cm[0], &strain);
+                syy[p] = w * dot3(&cm[1], &strain);
+                sxy[p] = w * dot3(&cm[2], &strain);
+            }
+        }
+        for b in 0..=py {
+            for a in 0..=px {
+                // f_k = sum over points of dphi_k/dx W sigma_x. + dphi_k/dy W sigma_y.
+                let (mut fx, mut fy) = (0.0, 0.0);
+                for k in 0..=px {
+                    let d = gx.derivative[k][a] / jx;
+                    let p = b * (px + 1) + k;
+                    fx += d * sxx[p];
+                    fy += d * sxy[p];
+                }
+                for k in 0..=py {
+                    let d = gy.derivative[k][b] / jy;
+                    let p = k * (px + 1) + a;
+                    fx += d * sxy[p];
+                    fy += d * syy[p];
+                }
+                let node = b * nx + i0 + a;
+                row.force[2 * node] += fx;
+                row.force[2 * node + 1] += fy;
+            }
+        }
+    }
+
+    /// Largest eigenvalue of M^-1 K over the `free` DOFs (Lanczos, as for the T3 model), and
+    /// the iterations used; dt_crit = 2 / sqrt of it.
+    pub fn max_eigenvalue(&self, free: &[bool]) -> (f64, usize) {
+        let work = std::cell::RefCell::new(self.workspace());
+        crate::solve::stability::lanczos_max_eigenvalue_of(&self.lumped_mass, free, |x, y| {
+            self.stiffness_times(x, y, &mut work.borrow_mut())
+        })
+    }
+}
+
+/// Highest polynomial order offered (the GLL points are accurate to round-off well beyond).
+pub const MAX_ORDER: usize = 16;
+
+fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Node coordinates along one axis: each element's GLL points mapped onto it, shared end
+/// points once.
+fn node_lines<'a>(lines: &[f64], rule: impl Fn(usize) -> &'a Gll) -> Vec<f64> {
+    let mut nodes = vec![lines[0]];
+    for e in 0..lines.len() - 1 {
+        let (a, b) = (lines[e], lines[e + 1]);
+        let g = rule(e);
+        nodes.extend(
+            g.points[1..]
+                .iter()
+                .map(|&xi| 0.5 * (a + b) + 0.5 * (b - a) * xi),
+        );
+        *nodes.last_mut().expect("points") = b;
+    }
+    nodes
+}
+
+fn check_lines(name: &str, lines: &[f64]) -> Result<()> {
+    if lines.len() < 2
+        || lines.iter().any(|v| !v.is_finite())
+        || lines.windows(2).any(|w| w[1] <= w[0])
+    {
+        return Err(Error::invalid(
+            name,
+            format!("{lines:?}"),
+            "needs at least two finite, strictly increasing lines",
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests;
