@@ -94,6 +94,19 @@ struct Report {
     crack: Vec<CrackRow>,
     bandwidth: Vec<Bandwidth>,
     sweep: Vec<SweepRow>,
+    sem: Vec<SemRow>,
+}
+
+/// One stiffness product K u of the spectral elements (homogeneous 0/90 fabric block, 16 mm
+/// wide, elements sized for ~100k DOFs at each order) next to the T3 operator's at the same
+/// DOF count.
+#[derive(Serialize)]
+struct SemRow {
+    order: usize,
+    dofs: usize,
+    threads: usize,
+    best_ns_per_dof: f64,
+    t3_best_ns_per_dof: f64,
 }
 
 /// A delayed TR-NEWS sweep on a linear scene: convolving one impulse response vs
@@ -305,7 +318,7 @@ fn triad(n: usize, threads: usize, reps: usize) -> f64 {
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    // --only SECTION (bandwidth, assembly, step, crack, sweep) runs one section, for profiling.
+    // --only SECTION (bandwidth, assembly, step, crack, sweep, sem) runs one section, for profiling.
     let args: Vec<String> = std::env::args().collect();
     let only = args
         .iter()
@@ -617,8 +630,79 @@ fn main() {
         });
     }
 
+    // --- spectral elements -------------------------------------------------------------
+    let mut sem_rows = Vec::new();
+    if run_section("sem") {
+        println!("\nStiffness product K u, ~100k DOFs, 0/90 fabric block (best of reps):");
+        let fabric = trnews::material::Orthotropic::preset("fabric_0_90")
+            .and_then(|m| m.reduce(Plane::Strain))
+            .expect("fabric");
+        let reps = if quick { 3 } else { 20 };
+        for order in [2, 4, 6, 8] {
+            // (ex p + 1)(ey p + 1) * 2 = 1e5 with ex = 4 ey
+            let ey = ((1e5 / 8.0f64).sqrt() / order as f64).round().max(1.0) as usize;
+            let ex = 4 * ey;
+            let sem = trnews::sem::SemModel::new(
+                (0..=ex).map(|i| i as f64 * WIDTH_M / ex as f64).collect(),
+                (0..=ey).map(|j| j as f64 * 4e-3 / ey as f64).collect(),
+                order,
+                &vec![order; ey],
+                vec![fabric.clone()],
+                vec![0; ey],
+            )
+            .expect("sem");
+            let n = sem.dofs();
+            let h = 4e-3 / ((n as f64 / 2.0 / 4.0).sqrt());
+            let lam = Laminate::homogeneous(fabric.clone(), 4e-3).expect("block");
+            let model = Model::build(
+                Mesh::layered(&lam, WIDTH_M, h, h, &[], &[]).expect("mesh"),
+                vec![fabric.clone()],
+                &[],
+                Vec::new(),
+                None,
+            )
+            .expect("t3");
+            let op = StiffnessOperator::new(&model);
+            let u: Vec<f64> = (0..n).map(|k| (k as f64 * 0.37).sin()).collect();
+            let u3: Vec<f64> = (0..model.dofs()).map(|k| (k as f64 * 0.37).sin()).collect();
+            for &t in &thread_counts {
+                let (sem_ns, t3_ns) = pool(t).install(|| {
+                    let mut out = vec![0.0; n];
+                    let mut work = sem.workspace();
+                    let mut best = f64::INFINITY;
+                    for _ in 0..reps {
+                        let c = Instant::now();
+                        sem.stiffness_times(&u, &mut out, &mut work);
+                        best = best.min(c.elapsed().as_secs_f64());
+                    }
+                    let mut out3 = vec![0.0; u3.len()];
+                    let mut best3 = f64::INFINITY;
+                    for _ in 0..reps {
+                        let c = Instant::now();
+                        op.mul(&u3, &mut out3);
+                        best3 = best3.min(c.elapsed().as_secs_f64());
+                    }
+                    std::hint::black_box((&out, &out3));
+                    (best * 1e9 / n as f64, best3 * 1e9 / u3.len() as f64)
+                });
+                println!(
+                    "  order {order}, {n} DOFs, {t} thread(s): SEM {sem_ns:6.2} ns/DOF, T3 ({} DOFs) {t3_ns:6.2} ns/DOF",
+                    u3.len()
+                );
+                sem_rows.push(SemRow {
+                    order,
+                    dofs: n,
+                    threads: t,
+                    best_ns_per_dof: sem_ns,
+                    t3_best_ns_per_dof: t3_ns,
+                });
+            }
+        }
+    }
+
     let report = Report {
         quick,
+        sem: sem_rows,
         sweep: sweep_rows,
         rayon_threads_available: max_threads,
         assembly,

@@ -40,6 +40,12 @@ pub struct SemModel {
     gll_x: Gll,
     /// GLL rule of each element row (its order across y).
     gll_y: Vec<Gll>,
+    /// D_x flattened row-wise, and its transpose.
+    derivative_x: Vec<f64>,
+    derivative_x_t: Vec<f64>,
+    /// D_y of each element row, flattened, and its transpose.
+    derivative_y: Vec<Vec<f64>>,
+    derivative_y_t: Vec<Vec<f64>>,
     /// First node row of each element row.
     first_line: Vec<usize>,
 }
@@ -55,6 +61,9 @@ pub struct SemWorkspace {
 struct RowWork {
     /// Forces on the row's node lines, `(order_y + 1) * nx * 2`.
     force: Vec<f64>,
+    /// One element's displacements at its GLL points.
+    ux: Vec<f64>,
+    uy: Vec<f64>,
     /// Weighted stresses W sigma_xx, W sigma_yy, W sigma_xy at the element's GLL points.
     stress: [Vec<f64>; 3],
 }
@@ -105,6 +114,8 @@ impl SemModel {
             first_line.push(line);
             line += g.order();
         }
+        let (derivative_x, derivative_x_t) = flat_derivative(&gll_x);
+        let (derivative_y, derivative_y_t) = gll_y.iter().map(flat_derivative).unzip();
         let mut model = SemModel {
             columns_m,
             rows_m,
@@ -115,6 +126,10 @@ impl SemModel {
             lumped_mass: Vec::new(),
             gll_x,
             gll_y,
+            derivative_x,
+            derivative_x_t,
+            derivative_y,
+            derivative_y_t,
             first_line,
         };
         model.lumped_mass = model.assemble_mass();
@@ -146,6 +161,8 @@ impl SemModel {
                 let points = (px + 1) * (g.order() + 1);
                 RowWork {
                     force: vec![0.0; (g.order() + 1) * self.nx() * 2],
+                    ux: vec![0.0; points],
+                    uy: vec![0.0; points],
                     stress: [vec![0.0; points], vec![0.0; points], vec![0.0; points]],
                 }
             })
@@ -217,57 +234,67 @@ impl SemModel {
         }
     }
 
-    /// One element's weighted stresses at its GLL points, then its forces added to the row.
+    /// One element: displacements gathered, strains and weighted stresses at the GLL points
+    /// (derivatives along xi from the rows of D_x, along eta from D_y), then the transposed
+    /// derivatives back to nodal forces, added to the row's force lines.
     fn element_forces(&self, r: usize, c: usize, u: &[f64], row: &mut RowWork) {
-        let (gx, gy) = (&self.gll_x, &self.gll_y[r]);
-        let (px, py) = (gx.order(), gy.order());
+        let (nax, nby) = (self.gll_x.order() + 1, self.gll_y[r].order() + 1);
+        let (dx, dxt) = (&self.derivative_x, &self.derivative_x_t);
+        let (dy, dyt) = (&self.derivative_y[r], &self.derivative_y_t[r]);
+        let (wx, wy) = (&self.gll_x.weights, &self.gll_y[r].weights);
         let nx = self.nx();
         let jx = 0.5 * (self.columns_m[c + 1] - self.columns_m[c]);
         let jy = 0.5 * (self.rows_m[r + 1] - self.rows_m[r]);
         let cm = &self.materials[self.row_material[r]].stiffness_pa;
-        let (i0, j0) = (c * px, self.first_line[r]);
-        let at = |a: usize, b: usize, comp: usize| u[2 * ((j0 + b) * nx + i0 + a) + comp];
-        let [sxx, syy, sxy] = &mut row.stress;
-        for b in 0..=py {
-            for a in 0..=px {
-                let (mut dux_dxi, mut duy_dxi, mut dux_deta, mut duy_deta) = (0.0, 0.0, 0.0, 0.0);
-                for k in 0..=px {
-                    let d = gx.derivative[a][k];
-                    dux_dxi += d * at(k, b, 0);
-                    duy_dxi += d * at(k, b, 1);
-                }
-                for k in 0..=py {
-                    let d = gy.derivative[b][k];
-                    dux_deta += d * at(a, k, 0);
-                    duy_deta += d * at(a, k, 1);
-                }
-                let strain = [dux_dxi / jx, duy_deta / jy, dux_deta / jy + duy_dxi / jx];
-                let w = gx.weights[a] * gy.weights[b] * jx * jy;
-                let p = b * (px + 1) + a;
-                sxx[p] = w * dot3(&cm[0], &strain);
-                syy[p] = w * dot3(&cm[1], &strain);
-                sxy[p] = w * dot3(&cm[2], &strain);
+        let (i0, j0) = (c * (nax - 1), self.first_line[r]);
+        let RowWork {
+            force,
+            ux,
+            uy,
+            stress: [sxx, syy, sxy],
+        } = row;
+        for b in 0..nby {
+            let line = &u[2 * ((j0 + b) * nx + i0)..2 * ((j0 + b) * nx + i0 + nax)];
+            for (a, v) in line.chunks_exact(2).enumerate() {
+                ux[b * nax + a] = v[0];
+                uy[b * nax + a] = v[1];
             }
         }
-        for b in 0..=py {
-            for a in 0..=px {
-                // f_k = sum over points of dphi_k/dx W sigma_x. + dphi_k/dy W sigma_y.
-                let (mut fx, mut fy) = (0.0, 0.0);
-                for k in 0..=px {
-                    let d = gx.derivative[k][a] / jx;
-                    let p = b * (px + 1) + k;
-                    fx += d * sxx[p];
-                    fy += d * sxy[p];
+        for b in 0..nby {
+            let dy_b = &dy[b * nby..(b + 1) * nby];
+            let (ux_b, uy_b) = (&ux[b * nax..(b + 1) * nax], &uy[b * nax..(b + 1) * nax]);
+            for a in 0..nax {
+                let dx_a = &dx[a * nax..(a + 1) * nax];
+                let dux_dxi = dot(dx_a, ux_b);
+                let duy_dxi = dot(dx_a, uy_b);
+                let (mut dux_deta, mut duy_deta) = (0.0, 0.0);
+                for (k, d) in dy_b.iter().enumerate() {
+                    dux_deta += d * ux[k * nax + a];
+                    duy_deta += d * uy[k * nax + a];
                 }
-                for k in 0..=py {
-                    let d = gy.derivative[k][b] / jy;
-                    let p = k * (px + 1) + a;
-                    fx += d * sxy[p];
-                    fy += d * syy[p];
+                let strain = [dux_dxi / jx, duy_deta / jy, dux_deta / jy + duy_dxi / jx];
+                let w = wx[a] * wy[b] * jx * jy;
+                let p = b * nax + a;
+                sxx[p] = w * dot(&cm[0], &strain);
+                syy[p] = w * dot(&cm[1], &strain);
+                sxy[p] = w * dot(&cm[2], &strain);
+            }
+        }
+        // f_x(a, b) = sum_k D_x[k][a] / jx W sxx(k, b) + sum_k D_y[k][b] / jy W sxy(a, k), and
+        // f_y with (sxy, syy): the transposes are stored row-wise for contiguous sums.
+        for b in 0..nby {
+            let dyt_b = &dyt[b * nby..(b + 1) * nby];
+            let (sxx_b, sxy_b) = (&sxx[b * nax..(b + 1) * nax], &sxy[b * nax..(b + 1) * nax]);
+            let out = &mut force[2 * (b * nx + i0)..2 * (b * nx + i0 + nax)];
+            for (a, f) in out.chunks_exact_mut(2).enumerate() {
+                let dxt_a = &dxt[a * nax..(a + 1) * nax];
+                let (mut fx_eta, mut fy_eta) = (0.0, 0.0);
+                for (k, d) in dyt_b.iter().enumerate() {
+                    fx_eta += d * sxy[k * nax + a];
+                    fy_eta += d * syy[k * nax + a];
                 }
-                let node = b * nx + i0 + a;
-                row.force[2 * node] += fx;
-                row.force[2 * node + 1] += fy;
+                f[0] += dot(dxt_a, sxx_b) / jx + fx_eta / jy;
+                f[1] += dot(dxt_a, sxy_b) / jx + fy_eta / jy;
             }
         }
     }
@@ -285,8 +312,16 @@ impl SemModel {
 /// Highest polynomial order offered (the GLL points are accurate to round-off well beyond).
 pub const MAX_ORDER: usize = 16;
 
-fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// A GLL derivative matrix flattened row-wise, and its transpose.
+fn flat_derivative(g: &Gll) -> (Vec<f64>, Vec<f64>) {
+    let n = g.order() + 1;
+    let d: Vec<f64> = g.derivative.iter().flatten().copied().collect();
+    let t = (0..n * n).map(|k| d[(k % n) * n + k / n]).collect();
+    (d, t)
 }
 
 /// Node coordinates along one axis: each element's GLL points mapped onto it, shared end
