@@ -226,75 +226,107 @@ impl SemModel {
             });
     }
 
-    /// Forces of element row `r` on its own node lines.
+    /// Forces of element row `r` on its own node lines. The element kernel is compiled for
+    /// each number of points along x (so its loops over them have fixed length); the order
+    /// was checked against [`MAX_ORDER`] when the model was built.
     fn row_forces(&self, r: usize, u: &[f64], row: &mut RowWork) {
         row.force.fill(0.0);
-        for c in 0..self.columns_m.len() - 1 {
-            self.element_forces(r, c, u, row);
+        let columns = 0..self.columns_m.len() - 1;
+        macro_rules! by_points {
+            ($($n:literal)*) => {
+                match self.gll_x.order() + 1 {
+                    $($n => columns.for_each(|c| self.element_forces::<$n>(r, c, u, row)),)*
+                    n => unreachable!("{n} GLL points along x: above MAX_ORDER + 1"),
+                }
+            };
         }
+        by_points!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
     }
 
-    /// One element: displacements gathered, strains and weighted stresses at the GLL points
-    /// (derivatives along xi from the rows of D_x, along eta from D_y), then the transposed
-    /// derivatives back to nodal forces, added to the row's force lines.
-    fn element_forces(&self, r: usize, c: usize, u: &[f64], row: &mut RowWork) {
-        let (nax, nby) = (self.gll_x.order() + 1, self.gll_y[r].order() + 1);
-        let (dx, dxt) = (&self.derivative_x, &self.derivative_x_t);
+    /// One element with `N` GLL points along x: displacements gathered, gradients at the GLL
+    /// points (d/dxi: sum_k D_x[a][k] u(k, b); d/deta: sum_k D_y[b][k] u(a, k)), weighted
+    /// stresses W C eps, then the transposed derivatives back to nodal forces,
+    /// f_x(a, b) = sum_k D_x[k][a] / jx W sxx(k, b) + sum_k D_y[k][b] / jy W sxy(a, k) (and f_y
+    /// with sxy, syy), added to the row's force lines. Every inner loop runs over the `N`
+    /// points of an element row, as a fixed-length multiply-add.
+    fn element_forces<const N: usize>(&self, r: usize, c: usize, u: &[f64], row: &mut RowWork) {
+        let nby = self.gll_y[r].order() + 1;
+        let dx = self.derivative_x.as_chunks::<N>().0;
+        let dxt = self.derivative_x_t.as_chunks::<N>().0;
         let (dy, dyt) = (&self.derivative_y[r], &self.derivative_y_t[r]);
-        let (wx, wy) = (&self.gll_x.weights, &self.gll_y[r].weights);
+        let wy = &self.gll_y[r].weights;
         let nx = self.nx();
         let jx = 0.5 * (self.columns_m[c + 1] - self.columns_m[c]);
         let jy = 0.5 * (self.rows_m[r + 1] - self.rows_m[r]);
         let cm = &self.materials[self.row_material[r]].stiffness_pa;
-        let (i0, j0) = (c * (nax - 1), self.first_line[r]);
+        let (i0, j0) = (c * (N - 1), self.first_line[r]);
         let RowWork {
             force,
             ux,
             uy,
             stress: [sxx, syy, sxy],
         } = row;
+        let ux = ux[..N * nby].as_chunks_mut::<N>().0;
+        let uy = uy[..N * nby].as_chunks_mut::<N>().0;
+        let sxx = sxx[..N * nby].as_chunks_mut::<N>().0;
+        let syy = syy[..N * nby].as_chunks_mut::<N>().0;
+        let sxy = sxy[..N * nby].as_chunks_mut::<N>().0;
         for b in 0..nby {
-            let line = &u[2 * ((j0 + b) * nx + i0)..2 * ((j0 + b) * nx + i0 + nax)];
-            for (a, v) in line.chunks_exact(2).enumerate() {
-                ux[b * nax + a] = v[0];
-                uy[b * nax + a] = v[1];
+            let start = 2 * ((j0 + b) * nx + i0);
+            for (a, v) in u[start..start + 2 * N].chunks_exact(2).enumerate() {
+                ux[b][a] = v[0];
+                uy[b][a] = v[1];
             }
         }
         for b in 0..nby {
-            let dy_b = &dy[b * nby..(b + 1) * nby];
-            let (ux_b, uy_b) = (&ux[b * nax..(b + 1) * nax], &uy[b * nax..(b + 1) * nax]);
-            for a in 0..nax {
-                let dx_a = &dx[a * nax..(a + 1) * nax];
-                let dux_dxi = dot(dx_a, ux_b);
-                let duy_dxi = dot(dx_a, uy_b);
-                let (mut dux_deta, mut duy_deta) = (0.0, 0.0);
-                for (k, d) in dy_b.iter().enumerate() {
-                    dux_deta += d * ux[k * nax + a];
-                    duy_deta += d * uy[k * nax + a];
+            let (mut dux_dxi, mut duy_dxi) = ([0.0; N], [0.0; N]);
+            for k in 0..N {
+                let (vx, vy, t) = (ux[b][k], uy[b][k], &dxt[k]);
+                for a in 0..N {
+                    dux_dxi[a] += t[a] * vx;
+                    duy_dxi[a] += t[a] * vy;
                 }
-                let strain = [dux_dxi / jx, duy_deta / jy, dux_deta / jy + duy_dxi / jx];
-                let w = wx[a] * wy[b] * jx * jy;
-                let p = b * nax + a;
-                sxx[p] = w * dot(&cm[0], &strain);
-                syy[p] = w * dot(&cm[1], &strain);
-                sxy[p] = w * dot(&cm[2], &strain);
+            }
+            let (mut dux_deta, mut duy_deta) = ([0.0; N], [0.0; N]);
+            for k in 0..nby {
+                let d = dy[b * nby + k];
+                for a in 0..N {
+                    dux_deta[a] += d * ux[k][a];
+                    duy_deta[a] += d * uy[k][a];
+                }
+            }
+            for a in 0..N {
+                let strain = [
+                    dux_dxi[a] / jx,
+                    duy_deta[a] / jy,
+                    dux_deta[a] / jy + duy_dxi[a] / jx,
+                ];
+                let w = self.gll_x.weights[a] * wy[b] * jx * jy;
+                sxx[b][a] = w * dot(&cm[0], &strain);
+                syy[b][a] = w * dot(&cm[1], &strain);
+                sxy[b][a] = w * dot(&cm[2], &strain);
             }
         }
-        // f_x(a, b) = sum_k D_x[k][a] / jx W sxx(k, b) + sum_k D_y[k][b] / jy W sxy(a, k), and
-        // f_y with (sxy, syy): the transposes are stored row-wise for contiguous sums.
         for b in 0..nby {
-            let dyt_b = &dyt[b * nby..(b + 1) * nby];
-            let (sxx_b, sxy_b) = (&sxx[b * nax..(b + 1) * nax], &sxy[b * nax..(b + 1) * nax]);
-            let out = &mut force[2 * (b * nx + i0)..2 * (b * nx + i0 + nax)];
-            for (a, f) in out.chunks_exact_mut(2).enumerate() {
-                let dxt_a = &dxt[a * nax..(a + 1) * nax];
-                let (mut fx_eta, mut fy_eta) = (0.0, 0.0);
-                for (k, d) in dyt_b.iter().enumerate() {
-                    fx_eta += d * sxy[k * nax + a];
-                    fy_eta += d * syy[k * nax + a];
+            let (mut fx, mut fy) = ([0.0; N], [0.0; N]);
+            for k in 0..N {
+                let (s1, s2, d) = (sxx[b][k] / jx, sxy[b][k] / jx, &dx[k]);
+                for a in 0..N {
+                    fx[a] += d[a] * s1;
+                    fy[a] += d[a] * s2;
                 }
-                f[0] += dot(dxt_a, sxx_b) / jx + fx_eta / jy;
-                f[1] += dot(dxt_a, sxy_b) / jx + fy_eta / jy;
+            }
+            for k in 0..nby {
+                let d = dyt[b * nby + k] / jy;
+                for a in 0..N {
+                    fx[a] += d * sxy[k][a];
+                    fy[a] += d * syy[k][a];
+                }
+            }
+            let start = 2 * (b * nx + i0);
+            for (a, f) in force[start..start + 2 * N].chunks_exact_mut(2).enumerate() {
+                f[0] += fx[a];
+                f[1] += fy[a];
             }
         }
     }
