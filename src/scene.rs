@@ -425,6 +425,7 @@ impl Scene {
             Some(p) => split_stability(&model, p, &absorbing)?,
             None => solve::stability::estimate(&model),
         };
+        crate::budget::check()?;
         if !(stability.dt_crit_s.is_finite() && stability.dt_crit_s > 0.0) {
             return Err(Error::invalid(
                 "laminate (materials)",

@@ -102,13 +102,17 @@ impl Model {
                 "is listed twice (it would absorb twice)",
             ));
         }
+        // Large models take seconds per stage: the time limit and Ctrl-C apply between them.
+        crate::budget::check()?;
         let mut stiffness = assemble_stiffness(&mesh, &materials)?;
+        crate::budget::check()?;
         for edge in absorbing {
             if let Some(r) = edge.spring_distance_m {
                 add_edge_springs(&mut stiffness, &mesh, &materials, edge.side, r)?;
             }
         }
         let lumped_mass = assemble_lumped_mass(&mesh, &materials)?;
+        crate::budget::check()?;
         let dashpots = assemble_dashpots(&mesh, &materials, &sides)?;
         Ok(Model {
             mesh,

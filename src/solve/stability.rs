@@ -61,7 +61,8 @@ fn lanczos_max_eigenvalue(model: &Model) -> (f64, usize) {
 /// Largest eigenvalue of the symmetric A = M^-1/2 K M^-1/2 over the `free` DOFs, for a
 /// diagonal `mass` and `stiffness(x, y)` computing y = K x, by Lanczos: the largest Ritz
 /// value of the tridiagonal T_k, a lower bound of lambda_max that converges quickly.
-/// Returns it and the iterations used.
+/// Returns it and the iterations used. Iteration stops early when the time limit or Ctrl-C
+/// stops work ([`crate::budget::check`]); the caller's next check reports it.
 pub(crate) fn lanczos_max_eigenvalue_of(
     mass: &[f64],
     free: &[bool],
@@ -97,6 +98,9 @@ pub(crate) fn lanczos_max_eigenvalue_of(
     );
     let mut b_prev = 0.0;
     for _ in 0..LANCZOS_STEPS.min(n) {
+        if crate::budget::check().is_err() {
+            break;
+        }
         apply(&q, &mut scaled, &mut w);
         let a = dot(&w, &q);
         for i in 0..n {
