@@ -20,8 +20,10 @@ pub mod plot;
 pub mod scene;
 pub mod script;
 pub mod signal;
+pub mod slurm;
 pub mod solve;
 pub mod study;
+pub mod sweep;
 pub mod transducer;
 pub mod trnews;
 
