@@ -656,8 +656,8 @@ mod tests {
 
     #[test]
     fn keys_are_stable_and_values_round_trip_bit_exactly() {
-        // The key of fixed inputs is fixed: it names files that other processes, machines
-        // and later runs look up (a change here orphans every stored point).
+        // Equal inputs give equal keys (other processes and later runs look files up by
+        // them); the last bit of a float, or the kind, gives another.
         let k = Key::of("test", &(1.5f64, "a", [1u8, 2])).unwrap();
         assert_eq!(k, Key::of("test", &(1.5f64, "a", [1u8, 2])).unwrap());
         assert_ne!(k, Key::of("test", &(1.5000000000000002f64, "a", [1u8, 2])).unwrap());

@@ -58,7 +58,7 @@ impl Plain {
             Err(format!(
                 "{what} is a {}: a sweep stores plain values only (numbers, strings, bools, \
                  arrays, maps); return e.g. a summary map instead",
-                value.type_name()
+                value.type_name().rsplit("::").next().unwrap_or_default()
             ))
         }
     }
