@@ -157,8 +157,28 @@ fn a_killed_sweep_resumes_computing_only_its_unfinished_points() {
 fn three_shards_and_a_merge_give_the_bytes_of_one_run() {
     let out = fresh_dir("shards");
     let mut simulated = 0;
-    for i in 1..=3 {
-        let stderr = run(&out, &["--shard", &format!("{i}/3")]);
+    // Shards 1 and 2 run at the same time, as array tasks do: both compute the shared
+    // first pass (equal signals, different wall times in its run reports) and write it.
+    let concurrent: Vec<_> = (1..=2)
+        .map(|i| {
+            sweep_command(&out, &["--shard", &format!("{i}/3")])
+                .stdout(Stdio::null())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let mut logs: Vec<String> = concurrent
+        .into_iter()
+        .map(|c| {
+            let o = c.wait_with_output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr).into_owned();
+            assert!(o.status.success(), "{err}");
+            err
+        })
+        .collect();
+    logs.push(run(&out, &["--shard", "3/3"]));
+    for (i, stderr) in (1..=3).zip(logs) {
         // Convolved points cost a convolution: every run computes the ones it lacks.
         // Simulated points 1..6 go round-robin: shard i computes points i and i + 3.
         let n = computed(&stderr, "simulated");

@@ -123,11 +123,13 @@ fn delayed_sweep(
         .iter()
         .flat_map(|p| p.0.iter())
         .fold(0.0f64, |m, d| m.max(*d));
-    // The first pass enters the keys by content: the focusing at this receiver, on every
-    // discretisation of the responder.
-    let focusing: Vec<&Focus> = std::iter::once(tr)
+    // The first pass enters the keys by content: the focusing signal and the focused signal
+    // at this receiver, on every discretisation of the responder (not the run reports,
+    // whose wall times differ between processes computing the same first pass).
+    let focusing: Vec<(&crate::signal::Signal, &crate::signal::Signal)> = std::iter::once(tr)
         .chain(&tr.companions)
         .filter_map(|t| t.focus.iter().find(|f| f.receiver == focus.receiver))
+        .map(|f| (&f.source, &f.focused))
         .collect();
     let first_pass = Key::of("delayed_first_pass", &(&tr.spec, &focusing)).at(ctx)?;
     let specs = points
