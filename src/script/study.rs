@@ -148,7 +148,7 @@ mod study_api {
     use crate::script::convert::{error, options, to_dynamic, WithPosition};
     use crate::script::HostContext;
     use crate::study::WorkPrecisionSpec;
-    use rhai::{Dynamic, Map, NativeCallContext};
+    use rhai::{Array, Dynamic, FnPtr, Map, NativeCallContext};
     use std::sync::Arc;
 
     type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
@@ -159,9 +159,9 @@ mod study_api {
         ctx: NativeCallContext,
         name: &str,
         inputs: Dynamic,
-        points: rhai::Array,
-        f: rhai::FnPtr,
-    ) -> Res<rhai::Array> {
+        points: Array,
+        f: FnPtr,
+    ) -> Res<Array> {
         super::sweep(&ctx, name, &inputs, &points, &f)
     }
 
