@@ -90,7 +90,10 @@ impl Jobs {
             return Err("--cpus 0: give at least 1 CPU per task".into());
         }
         for (flag, value) in [("--partition", &args.partition), ("--time", &args.time)] {
-            if let Some(v) = value.as_deref().filter(|v| v.is_empty() || v.contains(char::is_whitespace)) {
+            if let Some(v) = value
+                .as_deref()
+                .filter(|v| v.is_empty() || v.contains(char::is_whitespace))
+            {
                 return Err(format!("{flag} '{v}' is empty or contains white space"));
             }
         }
@@ -161,7 +164,8 @@ impl Jobs {
         );
         let mut merge = run.clone();
         merge.push("--merge".into());
-        let merge_text = format!(
+        let merge_text =
+            format!(
             "{}# Assembles the figures and tables of {} from the point files of the array job, \
              computing none; fails naming missing or failed points.\nset -euo pipefail\nexec {}\n",
             header(&format!("trnews-{stem}-merge"), &format!("{stem}-merge-%j.log"), ""),
@@ -214,7 +218,12 @@ fn sbatch(options: &[&str], file: &Path) -> Result<String, String> {
         ));
     }
     // --parsable prints "id" or "id;cluster".
-    let id = stdout.trim().split(';').next().unwrap_or_default().to_string();
+    let id = stdout
+        .trim()
+        .split(';')
+        .next()
+        .unwrap_or_default()
+        .to_string();
     if id.is_empty() || !id.bytes().all(|b| b.is_ascii_digit()) {
         return Err(format!("sbatch printed '{}', not a job id", stdout.trim()));
     }
@@ -245,14 +254,27 @@ mod tests {
         ])
         .unwrap();
         let jobs = Jobs::new(&args).unwrap();
-        assert!(jobs.array_text.contains("#SBATCH --array=0-3\n"), "{}", jobs.array_text);
+        assert!(
+            jobs.array_text.contains("#SBATCH --array=0-3\n"),
+            "{}",
+            jobs.array_text
+        );
         assert!(jobs.array_text.contains("#SBATCH --time=1:00:00\n"));
         assert!(jobs.array_text.contains("'--set' 'resolution=smoke'"));
-        assert!(jobs.array_text.contains(r"it'\''s.rhai'"), "{}", jobs.array_text);
+        assert!(
+            jobs.array_text.contains(r"it'\''s.rhai'"),
+            "{}",
+            jobs.array_text
+        );
         assert!(!jobs.array_text.contains("--merge"));
-        assert!(jobs.merge_text.contains("'--merge'\n"), "{}", jobs.merge_text);
+        assert!(
+            jobs.merge_text.contains("'--merge'\n"),
+            "{}",
+            jobs.merge_text
+        );
         assert!(!jobs.merge_text.contains("--array"));
-        let zero = SlurmArgs::try_parse_from(["slurm", script.to_str().unwrap(), "--array", "0"]).unwrap();
+        let zero =
+            SlurmArgs::try_parse_from(["slurm", script.to_str().unwrap(), "--array", "0"]).unwrap();
         assert!(Jobs::new(&zero).err().unwrap().contains("--array 0"));
         let _ = std::fs::remove_dir_all(&dir);
     }

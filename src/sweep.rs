@@ -343,10 +343,7 @@ where
     match store.load(kind, &key) {
         Found::Done(bytes) => match decode(&bytes) {
             Ok(value) => {
-                (store.say)(&format!(
-                    "{label}: read from {}",
-                    store.shown(kind, &key)
-                ));
+                (store.say)(&format!("{label}: read from {}", store.shown(kind, &key)));
                 return Ok(value);
             }
             Err(e) => (store.say)(&format!(
@@ -522,7 +519,11 @@ impl Sweep {
             Err(e) => {
                 let message = e.to_string();
                 let line = format!("{head} FAILED after {seconds:.2} s: {message}");
-                (Slot::Failed(message.clone()), line, Outcome::Failed(message))
+                (
+                    Slot::Failed(message.clone()),
+                    line,
+                    Outcome::Failed(message),
+                )
             }
         };
         if let Some(s) = &self.store {
@@ -638,20 +639,30 @@ mod tests {
                     .map(|(_, v)| v.to_string())
             }
         };
-        let task = env(&[("SLURM_ARRAY_TASK_ID", "5"), ("SLURM_ARRAY_TASK_COUNT", "4"), ("SLURM_ARRAY_TASK_MIN", "3")]);
+        let task = env(&[
+            ("SLURM_ARRAY_TASK_ID", "5"),
+            ("SLURM_ARRAY_TASK_COUNT", "4"),
+            ("SLURM_ARRAY_TASK_MIN", "3"),
+        ]);
         assert_eq!(
             Role::from_cli(None, false, task).unwrap(),
             Role::Shard(Shard { index: 2, count: 4 })
         );
         assert_eq!(Role::from_cli(None, false, env(&[])).unwrap(), Role::Whole);
-        let outside = env(&[("SLURM_ARRAY_TASK_ID", "9"), ("SLURM_ARRAY_TASK_COUNT", "4")]);
+        let outside = env(&[
+            ("SLURM_ARRAY_TASK_ID", "9"),
+            ("SLURM_ARRAY_TASK_COUNT", "4"),
+        ]);
         assert!(Role::from_cli(None, false, outside)
             .unwrap_err()
             .contains("SLURM_ARRAY_TASK_ID = 9"));
         // The command line wins over the environment; --merge excludes --shard.
-        let task = env(&[("SLURM_ARRAY_TASK_ID", "0"), ("SLURM_ARRAY_TASK_COUNT", "4")]);
-        assert_eq!(Role::from_cli(None, true, &task).unwrap(), Role::Merge);
-        assert!(Role::from_cli(Some("1/2"), true, &task).is_err());
+        let task = env(&[
+            ("SLURM_ARRAY_TASK_ID", "0"),
+            ("SLURM_ARRAY_TASK_COUNT", "4"),
+        ]);
+        assert_eq!(Role::from_cli(None, true, task).unwrap(), Role::Merge);
+        assert!(Role::from_cli(Some("1/2"), true, task).is_err());
     }
 
     #[test]
@@ -660,10 +671,20 @@ mod tests {
         // them); the last bit of a float, or the kind, gives another.
         let k = Key::of("test", &(1.5f64, "a", [1u8, 2])).unwrap();
         assert_eq!(k, Key::of("test", &(1.5f64, "a", [1u8, 2])).unwrap());
-        assert_ne!(k, Key::of("test", &(1.5000000000000002f64, "a", [1u8, 2])).unwrap());
+        assert_ne!(
+            k,
+            Key::of("test", &(1.5000000000000002f64, "a", [1u8, 2])).unwrap()
+        );
         assert_ne!(k, Key::of("other", &(1.5f64, "a", [1u8, 2])).unwrap());
         assert_eq!(k.as_str().len(), 64);
-        let values = vec![0.1f64, -0.0, f64::MIN_POSITIVE / 3.0, f64::INFINITY, f64::NAN, 1e300];
+        let values = vec![
+            0.1f64,
+            -0.0,
+            f64::MIN_POSITIVE / 3.0,
+            f64::INFINITY,
+            f64::NAN,
+            1e300,
+        ];
         let back: Vec<f64> = decode(&encode(&values).unwrap()).unwrap();
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&back), bits(&values));
@@ -711,7 +732,10 @@ mod tests {
         assert_eq!(again, vec![0, 2]);
         assert_eq!(values, vec![0.0, 0.1, 0.2]);
         let said = lines.lock().unwrap().join("\n");
-        assert!(said.contains("point 1/3 [p0]") && said.contains("is corrupt (checksum mismatch"), "{said}");
+        assert!(
+            said.contains("point 1/3 [p0]") && said.contains("is corrupt (checksum mismatch"),
+            "{said}"
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

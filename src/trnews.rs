@@ -69,18 +69,14 @@ impl Responder {
             };
             // The first pass of every later response: stored with the sweep's points.
             let inputs = (&r.scene.spec, r.dt_s, duration_s);
-            let response = crate::sweep::first_pass(
-                "impulse_response",
-                "impulse response",
-                &inputs,
-                || {
+            let response =
+                crate::sweep::first_pass("impulse_response", "impulse response", &inputs, || {
                     let out = r.scene.apply_traction(&unit, &r.run_config(duration_s))?;
                     Ok(Response {
                         traces: out.traces,
                         report: Some(out.report),
                     })
-                },
-            )?;
+                })?;
             r.impulse = Some(Arc::new(response));
         }
         Ok(r)

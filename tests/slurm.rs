@@ -21,11 +21,17 @@ fn slurm_job_array_and_merge_equal_a_local_run() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     match o.status.code() {
         Some(0) => {
-            assert!(stdout.contains("PASSED: Slurm 4-task array + merge = local run"), "{stdout}");
+            assert!(
+                stdout.contains("PASSED: Slurm 4-task array + merge = local run"),
+                "{stdout}"
+            );
             println!("{stdout}");
         }
         Some(77) => {
-            let reason = stdout.lines().find(|l| l.starts_with("SKIPPED")).unwrap_or("SKIPPED");
+            let reason = stdout
+                .lines()
+                .find(|l| l.starts_with("SKIPPED"))
+                .unwrap_or("SKIPPED");
             println!("{reason}");
             eprintln!("{reason}");
         }

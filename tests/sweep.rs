@@ -78,7 +78,10 @@ fn assert_same_outputs(out: &Path) {
     );
     assert!(want.len() >= 5, "{:?}", want.keys());
     for (name, bytes) in want {
-        assert!(got[name] == *bytes, "{name} differs from the uninterrupted run");
+        assert!(
+            got[name] == *bytes,
+            "{name} differs from the uninterrupted run"
+        );
     }
 }
 
@@ -123,8 +126,14 @@ fn a_killed_sweep_resumes_computing_only_its_unfinished_points() {
     let start = Instant::now();
     // 6 convolved points come first; kill once 1 to 5 of the 6 simulated ones are stored.
     while point_files(&out, "delayed").len() < 7 {
-        assert!(start.elapsed() < Duration::from_secs(120), "no point was stored");
-        assert!(child.try_wait().unwrap().is_none(), "the sweep ended before the kill");
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no point was stored"
+        );
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the sweep ended before the kill"
+        );
         std::thread::sleep(Duration::from_millis(5));
     }
     child.kill().unwrap(); // SIGKILL
@@ -142,7 +151,11 @@ fn a_killed_sweep_resumes_computing_only_its_unfinished_points() {
 
     let stderr = run(&out, &[]);
     assert_eq!(computed(&stderr, "convolved"), 0, "{stderr}");
-    assert_eq!(computed(&stderr, "simulated"), 6 - simulated_before, "{stderr}");
+    assert_eq!(
+        computed(&stderr, "simulated"),
+        6 - simulated_before,
+        "{stderr}"
+    );
     // The finished points were read, not rewritten: their files are the same inodes.
     let after = point_files(&out, "delayed");
     assert_eq!(after.len(), 12);
@@ -186,7 +199,9 @@ fn three_shards_and_a_merge_give_the_bytes_of_one_run() {
         simulated += n;
         if i < 3 {
             assert!(
-                stderr.contains(&format!("shard {i}/3: delayed TR-NEWS at receiver 3 (simulated)")),
+                stderr.contains(&format!(
+                    "shard {i}/3: delayed TR-NEWS at receiver 3 (simulated)"
+                )),
                 "{stderr}"
             );
         }
@@ -207,10 +222,15 @@ fn a_merge_names_missing_points_instead_of_plotting_a_partial_sweep() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(
-        stderr.contains("merge: delayed TR-NEWS at receiver 3 (simulated): 4 of 6 points are missing"),
+        stderr.contains(
+            "merge: delayed TR-NEWS at receiver 3 (simulated): 4 of 6 points are missing"
+        ),
         "{stderr}"
     );
-    for missing in ["1 [tau = [0.0, 5e-7] s, a = [1.0, 0.5]]", "6 [tau = [0.0, 2e-6] s, a = [1.0, 1.0]]"] {
+    for missing in [
+        "1 [tau = [0.0, 5e-7] s, a = [1.0, 0.5]]",
+        "6 [tau = [0.0, 2e-6] s, a = [1.0, 1.0]]",
+    ] {
         assert!(stderr.contains(missing), "{missing} not named: {stderr}");
     }
     assert!(std::fs::metadata(out.join("plots/sweep_delays_misfit_cracked.png")).is_err());
@@ -238,7 +258,10 @@ fn corrupt_and_truncated_point_files_are_recomputed_never_merged() {
     // Each damaged file is reported and its point recomputed, to the same bytes.
     let stderr = run(&out, &[]);
     assert_eq!(stderr.matches("is corrupt").count(), 3, "{stderr}");
-    assert!(stderr.contains("truncated") || stderr.contains("checksum mismatch"), "{stderr}");
+    assert!(
+        stderr.contains("truncated") || stderr.contains("checksum mismatch"),
+        "{stderr}"
+    );
     let total = computed(&stderr, "convolved") + computed(&stderr, "simulated");
     assert_eq!(total, 2, "{stderr}");
     assert_same_outputs(&out);
@@ -276,24 +299,39 @@ fn a_failed_point_is_recorded_named_and_does_not_stop_the_others() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(
-        stderr.contains("sweep 'squares': 1 of 4 points failed") && stderr.contains("3 [3]: ") && stderr.contains("point three refuses"),
+        stderr.contains("sweep 'squares': 1 of 4 points failed")
+            && stderr.contains("3 [3]: ")
+            && stderr.contains("point three refuses"),
         "{stderr}"
     );
-    assert!(stderr.contains("point 4/4 [4] done"), "point 4 did not run: {stderr}");
-    assert_eq!(point_files(&out, "sweep").len(), 4, "3 results and 1 failure");
+    assert!(
+        stderr.contains("point 4/4 [4] done"),
+        "point 4 did not run: {stderr}"
+    );
+    assert_eq!(
+        point_files(&out, "sweep").len(),
+        4,
+        "3 results and 1 failure"
+    );
     assert!(std::fs::metadata(out.join("squares.csv")).is_err());
 
     let o = squares(&out, &["--merge"]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
-    assert!(stderr.contains("0 of 4 points are missing and 1 failed"), "{stderr}");
+    assert!(
+        stderr.contains("0 of 4 points are missing and 1 failed"),
+        "{stderr}"
+    );
     assert!(stderr.contains("point three refuses"), "{stderr}");
 
     // The cause gone, a rerun computes the failed point only.
     let o = squares(&out, &["--set", "fail=false"]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
-    assert!(stderr.contains("4 points, 3 stored before, 1 computed here, 0 failed"), "{stderr}");
+    assert!(
+        stderr.contains("4 points, 3 stored before, 1 computed here, 0 failed"),
+        "{stderr}"
+    );
     let csv = std::fs::read_to_string(out.join("squares.csv")).unwrap();
     assert_eq!(
         csv,
@@ -315,7 +353,12 @@ fn sweep_results_must_be_plain_values() {
         r#"study::sweep("s", #{}, [1], |x| signal::from_array(1e-6, 0.0, [1.0, 2.0]));"#,
     )
     .unwrap();
-    let o = Command::new(BIN).arg(&file).args(["--quiet", "--out"]).arg(&out).output().unwrap();
+    let o = Command::new(BIN)
+        .arg(&file)
+        .args(["--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(
@@ -329,8 +372,14 @@ fn sweep_results_must_be_plain_values() {
 fn a_shard_argument_is_checked() {
     let out = fresh_dir("badshard");
     for (args, says) in [
-        (vec!["--shard", "4/3"], "--shard 4/3: expected I/N with 1 <= I <= N"),
-        (vec!["--shard", "1/2", "--merge"], "--shard and --merge exclude each other"),
+        (
+            vec!["--shard", "4/3"],
+            "--shard 4/3: expected I/N with 1 <= I <= N",
+        ),
+        (
+            vec!["--shard", "1/2", "--merge"],
+            "--shard and --merge exclude each other",
+        ),
     ] {
         let o = sweep_command(&out, &args).output().unwrap();
         let stderr = String::from_utf8_lossy(&o.stderr);
@@ -363,7 +412,13 @@ fn a_point_computed_alone_is_bit_identical_to_the_same_point_in_the_whole_sweep(
         let alone =
             delayed_tr_news_within(&r, &tr, &tr.focus[0], &points[i..=i], 5e-6, 2e-6).unwrap();
         assert_eq!(alone[0].misfit.to_bits(), w.misfit.to_bits());
-        assert_eq!(bits(&alone[0].simulation.samples), bits(&w.simulation.samples));
-        assert_eq!(bits(&alone[0].prediction.samples), bits(&w.prediction.samples));
+        assert_eq!(
+            bits(&alone[0].simulation.samples),
+            bits(&w.simulation.samples)
+        );
+        assert_eq!(
+            bits(&alone[0].prediction.samples),
+            bits(&w.prediction.samples)
+        );
     }
 }

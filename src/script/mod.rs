@@ -377,7 +377,8 @@ impl Host {
         crate::budget::clear();
         match result? {
             Err(e) if Self::shard_done(&e).is_some() => {
-                self.context.print(&Self::shard_done(&e).unwrap_or_default());
+                self.context
+                    .print(&Self::shard_done(&e).unwrap_or_default());
                 Ok(())
             }
             other => other.map_err(|e| self.render(name, &e)),

@@ -152,7 +152,11 @@ fn delayed_sweep(
         })
         .collect::<crate::Result<Vec<_>>>()
         .at(ctx)?;
-    let how = if r.convolves() { "convolved" } else { "simulated" };
+    let how = if r.convolves() {
+        "convolved"
+    } else {
+        "simulated"
+    };
     let name = format!("delayed TR-NEWS at receiver {} ({how})", focus.receiver);
     let sweep = Sweep::start(&name, "delayed", specs);
     sweep
@@ -161,9 +165,15 @@ fn delayed_sweep(
         .try_for_each(|&i| {
             let start = std::time::Instant::now();
             let one = &points[i..=i];
-            let outcome =
-                crate::trnews::delayed_tr_news_within(r, tr, focus, one, half_window_s, max_delay_s)
-                    .map(|mut v| v.remove(0));
+            let outcome = crate::trnews::delayed_tr_news_within(
+                r,
+                tr,
+                focus,
+                one,
+                half_window_s,
+                max_delay_s,
+            )
+            .map(|mut v| v.remove(0));
             let note = outcome
                 .as_ref()
                 .ok()
