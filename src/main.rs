@@ -8,7 +8,12 @@ use trnews::script::{parse_param_value, Host, HostOptions, ScriptError, DEFAULT_
 
 /// Run a trnews experiment script (Rhai): simulations, TR-NEWS processing, figures and data files.
 #[derive(Debug, Parser)]
-#[command(name = "trnews-script", version, about)]
+#[command(
+    name = "trnews-script",
+    version,
+    about,
+    after_help = "Sweeps on a Slurm cluster: trnews-script slurm SCRIPT --array N [--partition P] [--time T] [--cpus C] [--out DIR] [--set NAME=VALUE ...] [--submit] (see trnews-script slurm --help)"
+)]
 struct Cli {
     /// The script to run, e.g. scripts/sweep_delays.rhai.
     #[arg(required_unless_present = "api")]

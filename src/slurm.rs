@@ -11,7 +11,7 @@ use std::process::Command;
 /// Write (and with --submit, submit) a Slurm job array that computes SCRIPT's sweep points in
 /// N shards, and a merge job that runs after it (afterok).
 #[derive(Debug, Parser)]
-#[command(name = "trnews-script slurm")]
+#[command(name = "trnews-script slurm", bin_name = "trnews-script slurm")]
 pub struct SlurmArgs {
     /// The script, e.g. scripts/sweep_delays.rhai.
     script: PathBuf,
@@ -40,7 +40,18 @@ pub struct SlurmArgs {
 
 /// Runs the `slurm` command; `args` starts with "slurm".
 pub fn main(args: impl IntoIterator<Item = OsString>) -> Result<(), String> {
-    let args = SlurmArgs::try_parse_from(args).map_err(|e| e.to_string())?;
+    let args = match SlurmArgs::try_parse_from(args) {
+        Ok(args) => args,
+        // --help: clap's text on stdout, not an error
+        Err(e) if !e.use_stderr() => {
+            print!("{e}");
+            return Ok(());
+        }
+        Err(e) => {
+            let text = e.to_string();
+            return Err(text.trim_start_matches("error: ").trim_end().to_string());
+        }
+    };
     let jobs = Jobs::new(&args)?;
     jobs.write()?;
     println!(
