@@ -422,3 +422,18 @@ fn a_point_computed_alone_is_bit_identical_to_the_same_point_in_the_whole_sweep(
         );
     }
 }
+
+#[test]
+fn point_files_stay_inside_the_output_directory() {
+    // points/ as a symlink leading out is refused on read and on write, as every output is.
+    let out = fresh_dir("symlink");
+    let outside = fresh_dir("symlink-target");
+    std::os::unix::fs::symlink(&outside, out.join("points")).unwrap();
+    let o = sweep_command(&out, &[]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(stderr.contains("leads outside the output directory"), "{stderr}");
+    assert_eq!(std::fs::read_dir(&outside).unwrap().count(), 0, "wrote outside");
+    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_dir_all(&outside);
+}
