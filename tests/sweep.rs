@@ -432,8 +432,15 @@ fn point_files_stay_inside_the_output_directory() {
     let o = sweep_command(&out, &[]).output().unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
-    assert!(stderr.contains("leads outside the output directory"), "{stderr}");
-    assert_eq!(std::fs::read_dir(&outside).unwrap().count(), 0, "wrote outside");
+    assert!(
+        stderr.contains("leads outside the output directory"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_dir(&outside).unwrap().count(),
+        0,
+        "wrote outside"
+    );
     let _ = std::fs::remove_dir_all(&out);
     let _ = std::fs::remove_dir_all(&outside);
 }
