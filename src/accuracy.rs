@@ -26,7 +26,7 @@
 
 use crate::error::Result;
 use crate::signal::{self, Signal};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Order of convergence of linear triangles with lumped mass and central differences
 /// (dispersion error O(h^2) in space and O(dt^2) in time, dt tied to h).
@@ -37,7 +37,7 @@ pub const ORDER_TOLERANCE: f64 = 0.5;
 const ROUND_OFF: f64 = 1e-10;
 
 /// What the companion runs say about an estimate.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
     /// The observed order is close to the scheme's: the estimate is reliable.
@@ -52,7 +52,7 @@ pub enum Verdict {
 }
 
 /// A quantity with its discretisation error estimate.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Estimate {
     /// Whether this is a waveform's relative L2 error (true) or a scalar's error.
     pub waveform: bool,

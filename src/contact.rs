@@ -57,7 +57,7 @@ impl Default for ContactOptions {
 }
 
 /// Contact diagnostics of a run: scalars only (the per-step counts are in [`ContactSeries`]).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct ContactReport {
     /// Method used.
     pub method: String,

@@ -217,6 +217,36 @@ thread_local! {
     static ACTIVE_ROOT: std::cell::RefCell<Option<OutputRoot>> = const { std::cell::RefCell::new(None) };
 }
 
+/// Reads `path` whole, `Ok(None)` when it does not exist. While an [`OutputRoot`] is active
+/// on this thread, `path` must lie under it and is read beneath its open directory (a
+/// symlink leading out is refused), as writes are.
+pub fn read_existing(path: &Path) -> Result<Option<Vec<u8>>, OutputError> {
+    let read = match active_root() {
+        Some(root) => {
+            let rel = root.relative(path)?;
+            root.dir.read(rel).map_err(|e| {
+                if root.leads_outside(rel) {
+                    std::io::Error::other("outside of the filesystem")
+                } else {
+                    e
+                }
+            })
+        }
+        None => fs::read(path),
+    };
+    match read {
+        Ok(bytes) => Ok(Some(bytes)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(e) if e.to_string().contains("outside of the filesystem") => {
+            Err(OutputError::Outside {
+                path: path.to_path_buf(),
+                root: active_root().map(|r| r.path.clone()).unwrap_or_default(),
+            })
+        }
+        Err(e) => Err(OutputError::io("read", path, e)),
+    }
+}
+
 /// The output root active on this thread, if any.
 pub fn active_root() -> Option<OutputRoot> {
     ACTIVE_ROOT.with(|r| r.borrow().clone())

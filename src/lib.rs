@@ -21,8 +21,10 @@ pub mod scene;
 pub mod script;
 pub mod sem;
 pub mod signal;
+pub mod slurm;
 pub mod solve;
 pub mod study;
+pub mod sweep;
 pub mod transducer;
 pub mod trnews;
 

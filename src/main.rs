@@ -22,7 +22,12 @@ fn heap_use() -> trnews::budget::HeapUse {
 
 /// Run a trnews experiment script (Rhai): simulations, TR-NEWS processing, figures and data files.
 #[derive(Debug, Parser)]
-#[command(name = "trnews-script", version, about)]
+#[command(
+    name = "trnews-script",
+    version,
+    about,
+    after_help = "Sweeps on a Slurm cluster: trnews-script slurm SCRIPT --array N [--partition P] [--time T] [--cpus C] [--out DIR] [--set NAME=VALUE ...] [--submit] (see trnews-script slurm --help)"
+)]
 struct Cli {
     /// The script to run, e.g. scripts/sweep_delays.rhai.
     #[arg(required_unless_present = "api")]
@@ -55,6 +60,14 @@ struct Cli {
     /// List every function the scripting API offers, with descriptions, and exit.
     #[arg(long)]
     api: bool,
+    /// Compute only share I of N of every sweep's points, then stop (default inside a Slurm
+    /// array job: SLURM_ARRAY_TASK_ID / SLURM_ARRAY_TASK_COUNT).
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
+    /// Compute no sweep point: assemble figures and tables from the stored point files,
+    /// naming missing or failed points.
+    #[arg(long)]
+    merge: bool,
 }
 
 /// Splits `NAME=VALUE`.
@@ -65,6 +78,16 @@ fn parse_set(text: &str) -> Result<(String, String), String> {
 }
 
 fn main() -> ExitCode {
+    // `trnews-script slurm SCRIPT --array N ...` writes (and submits) Slurm batch scripts.
+    if std::env::args_os().nth(1).is_some_and(|a| a == "slurm") {
+        return match trnews::slurm::main(std::env::args_os().skip(1)) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        };
+    }
     let cli = Cli::parse();
     match run(&cli) {
         Ok(()) => ExitCode::SUCCESS,
@@ -118,6 +141,10 @@ fn run(cli: &Cli) -> Result<(), ScriptError> {
         quiet: cli.quiet,
         time_limit,
         max_memory: (cli.max_memory * (1u64 << 30) as f64).min(u64::MAX as f64) as u64,
+        sweep: trnews::sweep::Role::from_cli(cli.shard.as_deref(), cli.merge, |v| {
+            std::env::var(v).ok()
+        })
+        .map_err(|e| ScriptError::new("--shard", e))?,
     })?;
     if cli.api {
         print_api(&host);

@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
 /// Recorded responses of every receiver to one transmission.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Response {
     /// One trace per receiver, from t = 0 at the solver step.
     pub traces: Vec<Signal>,
@@ -67,13 +67,38 @@ impl Responder {
                 t0_s: 0.0,
                 samples: vec![1.0],
             };
-            let out = r.scene.apply_traction(&unit, &r.run_config(duration_s))?;
-            r.impulse = Some(Arc::new(Response {
-                traces: out.traces,
-                report: Some(out.report),
-            }));
+            // The first pass of every later response: stored with the sweep's points.
+            let inputs = (&r.scene.spec, r.dt_s, duration_s);
+            let response =
+                crate::sweep::first_pass("impulse_response", "impulse response", &inputs, || {
+                    let out = r.scene.apply_traction(&unit, &r.run_config(duration_s))?;
+                    Ok(Response {
+                        traces: out.traces,
+                        report: Some(out.report),
+                    })
+                })?;
+            r.impulse = Some(Arc::new(response));
         }
         Ok(r)
+    }
+
+    /// True when responses are convolutions with a stored impulse response (a linear
+    /// scene), false when every transmission is simulated.
+    pub fn convolves(&self) -> bool {
+        self.impulse.is_some()
+    }
+
+    /// Everything that determines this responder's answers, for the keys of stored
+    /// results: per discretisation (this one, then the companions) the scene spec, the
+    /// step and, when convolving, the impulse response's length.
+    pub fn identity(&self) -> Vec<(&crate::scene::SceneSpec, f64, Option<usize>)> {
+        std::iter::once(self)
+            .chain(&self.companions)
+            .map(|r| {
+                let length = r.impulse.as_ref().map(|h| h.traces[0].len());
+                (&r.scene.spec, r.dt_s, length)
+            })
+            .collect()
     }
 
     /// The scenes of an error estimate's companions: this scene (same laminate draw) with 2x
@@ -266,7 +291,7 @@ impl Default for TrNewsSpec {
 }
 
 /// TR-NEWS focusing at one receiver.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Focus {
     /// Receiver number (1-based).
     pub receiver: usize,
@@ -291,7 +316,7 @@ pub struct Focus {
 }
 
 /// Richardson estimates of the headline quantities of a focus (see [`crate::accuracy`]).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct FocusEstimates {
     /// First-pass response y at this receiver over the record (relative L2).
     pub response: Estimate,
@@ -319,7 +344,7 @@ impl Focus {
 }
 
 /// The result of the TR-NEWS procedure.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct TrNews {
     /// The parameters used.
     pub spec: TrNewsSpec,
@@ -366,8 +391,16 @@ impl TrNewsSpec {
 }
 
 /// Runs TR-NEWS: chirp -> y -> Gamma = xcorr(y, c) -> Gamma(T - t) -> y_TR (eqs 6-9), and
-/// on the responder's companions, with the error estimates of every focus.
+/// on the responder's companions, with the error estimates of every focus. This first pass
+/// of a sweep is stored with its points (see [`crate::sweep::first_pass`]).
 pub fn tr_news(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
+    let inputs = (responder.identity(), spec);
+    crate::sweep::first_pass("tr_news", "TR-NEWS first pass", &inputs, || {
+        tr_news_computed(responder, spec)
+    })
+}
+
+fn tr_news_computed(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
     let mut main = tr_news_once(responder, spec)?;
     main.companions = responder
         .companions
@@ -566,7 +599,7 @@ fn focus_at(
 
 /// Delayed TR-NEWS at one point (eqs 10-11): simulation of the composite source
 /// sum_i a_i s(t - tau_i) against the linear prediction sum_i a_i y_TR(t - tau_i).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Delayed {
     /// Delays tau_i (s).
     pub delays_s: Vec<f64>,
@@ -589,7 +622,7 @@ pub struct Delayed {
 }
 
 /// Richardson estimates of a delayed TR-NEWS point (see [`crate::accuracy`]).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct DelayedEstimates {
     /// The misfit.
     pub misfit: Estimate,
@@ -608,7 +641,25 @@ pub fn delayed_tr_news(
     points: &[(Vec<f64>, Vec<f64>)],
     half_window_s: f64,
 ) -> Result<Vec<Delayed>> {
-    let mut main = delayed_once(responder, tr, focus, points, half_window_s)?;
+    let max_delay_s = points
+        .iter()
+        .flat_map(|p| p.0.iter())
+        .fold(0.0f64, |m, d| m.max(*d));
+    delayed_tr_news_within(responder, tr, focus, points, half_window_s, max_delay_s)
+}
+
+/// [`delayed_tr_news`] for some points of a sweep whose largest delay is `max_delay_s`: every
+/// response runs over the focus duration plus that delay, as in the whole sweep, so a point
+/// computed alone is bit-identical to the same point computed with all the others.
+pub fn delayed_tr_news_within(
+    responder: &Responder,
+    tr: &TrNews,
+    focus: &Focus,
+    points: &[(Vec<f64>, Vec<f64>)],
+    half_window_s: f64,
+    max_delay_s: f64,
+) -> Result<Vec<Delayed>> {
+    let mut main = delayed_once(responder, tr, focus, points, half_window_s, max_delay_s)?;
     let ([rm, rc], [tm, tc]) = (&responder.companions[..], &tr.companions[..]) else {
         return Ok(main);
     };
@@ -618,7 +669,7 @@ pub fn delayed_tr_news(
             .iter()
             .find(|f| f.receiver == focus.receiver)
             .ok_or_else(|| Error::invalid("receiver", focus.receiver, "has no companion focus"))?;
-        delayed_once(r, t, f, points, half_window_s)
+        delayed_once(r, t, f, points, half_window_s, max_delay_s)
     };
     let (medium, coarse) = (on(rm, tm)?, on(rc, tc)?);
     for ((d, m), c) in main.iter_mut().zip(&medium).zip(&coarse) {
@@ -645,13 +696,16 @@ pub fn delayed_tr_news(
 /// Delayed TR-NEWS for several (delays, amplitudes) points, simulated in parallel.
 /// Delays are rounded to whole solver steps (at most dt/2, a few ns, off), so that source
 /// and prediction are shifted exactly and a linear scene's misfit is round-off. The misfit
-/// window spans the focus times window_s + tau_i, widened by `half_window_s`.
+/// window spans the focus times window_s + tau_i, widened by `half_window_s`. Responses run
+/// over the focus duration plus `max_delay_s` rounded to a whole step (rounding is monotone,
+/// so that is the largest rounded delay of the sweep).
 fn delayed_once(
     responder: &Responder,
     tr: &TrNews,
     focus: &Focus,
     points: &[(Vec<f64>, Vec<f64>)],
     half_window_s: f64,
+    max_delay_s: f64,
 ) -> Result<Vec<Delayed>> {
     let dt = responder.dt_s();
     let points: Vec<(Vec<f64>, Vec<f64>)> = points
@@ -669,11 +723,7 @@ fn delayed_once(
         }
         sources.push(signal::delay_and_sum(&focus.source, delays, amplitudes)?);
     }
-    let max_delay = points
-        .iter()
-        .flat_map(|p| p.0.iter())
-        .fold(0.0f64, |m, d| m.max(*d));
-    let duration = tr.spec.focus_duration_s() + max_delay;
+    let duration = tr.spec.focus_duration_s() + (max_delay_s / dt).round() * dt;
     let responses = responder.respond_all(&sources, duration)?;
     points
         .iter()

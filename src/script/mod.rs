@@ -80,6 +80,9 @@ pub struct HostOptions {
     /// Memory limit in bytes (`--max-memory`): the live heap of the run, when the process
     /// meters its heap, and every request's estimate (a scene, a run, a signal) on top of it.
     pub max_memory: u64,
+    /// What the run does with sweep points not stored yet: all, a shard's share, or none
+    /// (`--shard`, `--merge`; see [`crate::sweep`]).
+    pub sweep: crate::sweep::Role,
 }
 
 impl Default for HostOptions {
@@ -91,6 +94,7 @@ impl Default for HostOptions {
             quiet: false,
             time_limit: None,
             max_memory: crate::budget::DEFAULT_MEMORY_LIMIT,
+            sweep: crate::sweep::Role::Whole,
         }
     }
 }
@@ -253,6 +257,27 @@ pub struct Host {
     context: Arc<HostContext>,
     time_limit: Option<Duration>,
     max_memory: u64,
+    sweep: crate::sweep::Role,
+}
+
+/// The token of a shard run that has computed its share of a sweep: the script stops there,
+/// and the run succeeds (see [`crate::sweep::SweepError::ShardDone`]).
+#[derive(Clone, Debug)]
+struct ShardDone(String);
+
+/// A sweep's failure as a script error: a finished shard ends the script successfully
+/// (an uncatchable termination the host recognises), anything else is an error at `ctx`.
+pub(crate) fn sweep_error(
+    ctx: &rhai::NativeCallContext,
+    e: crate::sweep::SweepError,
+) -> Box<EvalAltResult> {
+    match e {
+        crate::sweep::SweepError::ShardDone(message) => {
+            EvalAltResult::ErrorTerminated(Dynamic::from(ShardDone(message)), ctx.call_position())
+                .into()
+        }
+        other => convert::error(ctx, other),
+    }
 }
 
 impl Host {
@@ -301,6 +326,7 @@ impl Host {
             context,
             time_limit: options.time_limit,
             max_memory: options.max_memory,
+            sweep: options.sweep,
         })
     }
 
@@ -334,8 +360,15 @@ impl Host {
         self.context.start(name);
         crate::budget::start(self.time_limit);
         crate::budget::set_memory_limit(self.max_memory);
+        let printer = Arc::clone(&self.context);
+        let store = Arc::new(crate::sweep::Store::new(
+            &self.context.out_dir,
+            self.context.root.clone(),
+            self.sweep,
+            move |line| printer.print(line),
+        ));
         let result = self.guarded(name, || {
-            let mut run = || self.engine.run_ast_with_scope(&mut scope, &ast);
+            let mut run = || store.within(|| self.engine.run_ast_with_scope(&mut scope, &ast));
             match &self.context.root {
                 Some(root) => root.within(run),
                 None => run(),
@@ -343,7 +376,24 @@ impl Host {
         });
         self.context.finish();
         crate::budget::clear();
-        result?.map_err(|e| self.render(name, &e))
+        match result? {
+            Err(e) if Self::shard_done(&e).is_some() => {
+                self.context
+                    .print(&Self::shard_done(&e).unwrap_or_default());
+                Ok(())
+            }
+            other => other.map_err(|e| self.render(name, &e)),
+        }
+    }
+
+    /// The message of a shard that finished its share, when `err` is that stop.
+    fn shard_done(err: &EvalAltResult) -> Option<String> {
+        match err.unwrap_inner() {
+            EvalAltResult::ErrorTerminated(token, _) => {
+                token.read_lock::<ShardDone>().map(|s| s.0.clone())
+            }
+            _ => None,
+        }
     }
 
     /// Runs `f`, turning a panic that escaped a native function into a [`ScriptError`] naming

@@ -104,7 +104,108 @@ pub fn module() -> Module {
     exported_module!(trnews_api)
 }
 
-/// Delay points from an array of maps #{delays: [...], amplitudes: [...]}.
+/// Delayed TR-NEWS over `points` as a sweep of work units (see [`crate::sweep`]): each point
+/// is stored when done, read back by a rerun, shared out by a shard and only read by a
+/// merge. Points are computed in parallel; each one runs over the sweep's longest delay, so
+/// it is the same computed alone or with the others.
+fn delayed_sweep(
+    ctx: &NativeCallContext,
+    r: &Responder,
+    tr: &TrNews,
+    focus: &Focus,
+    points: &[(Vec<f64>, Vec<f64>)],
+    half_window_s: f64,
+) -> ScriptResult<Vec<Delayed>> {
+    use crate::script::WithPosition;
+    use crate::sweep::{Key, PointSpec, Sweep};
+    use rayon::prelude::*;
+    let max_delay_s = points
+        .iter()
+        .flat_map(|p| p.0.iter())
+        .fold(0.0f64, |m, d| m.max(*d));
+    // The first pass enters the keys by content: the focusing signal and the focused signal
+    // at this receiver, on every discretisation of the responder (not the run reports,
+    // whose wall times differ between processes computing the same first pass).
+    let focusing: Vec<(&crate::signal::Signal, &crate::signal::Signal)> = std::iter::once(tr)
+        .chain(&tr.companions)
+        .filter_map(|t| t.focus.iter().find(|f| f.receiver == focus.receiver))
+        .map(|f| (&f.source, &f.focused))
+        .collect();
+    let first_pass = Key::of("delayed_first_pass", &(&tr.spec, &focusing)).at(ctx)?;
+    let specs = points
+        .iter()
+        .map(|(delays, amplitudes)| {
+            let inputs = (
+                r.identity(),
+                first_pass.as_str(),
+                focus.receiver,
+                half_window_s,
+                max_delay_s,
+                delays,
+                amplitudes,
+            );
+            Ok(PointSpec {
+                key: Key::of("delayed", &inputs)?,
+                label: format!("tau = {delays:?} s, a = {amplitudes:?}"),
+                sharded: !r.convolves(),
+            })
+        })
+        .collect::<crate::Result<Vec<_>>>()
+        .at(ctx)?;
+    let how = if r.convolves() {
+        "convolved"
+    } else {
+        "simulated"
+    };
+    let name = format!("delayed TR-NEWS at receiver {} ({how})", focus.receiver);
+    let sweep = Sweep::start(&name, "delayed", specs);
+    sweep
+        .pending()
+        .par_iter()
+        .try_for_each(|&i| {
+            let start = std::time::Instant::now();
+            let one = &points[i..=i];
+            let outcome = crate::trnews::delayed_tr_news_within(
+                r,
+                tr,
+                focus,
+                one,
+                half_window_s,
+                max_delay_s,
+            )
+            .map(|mut v| v.remove(0));
+            let note = outcome
+                .as_ref()
+                .ok()
+                .and_then(|d| d.report.as_ref())
+                .map(report_note)
+                .unwrap_or_default();
+            sweep.record(i, outcome, start.elapsed().as_secs_f64(), &note)
+        })
+        .at(ctx)?;
+    sweep
+        .finish()
+        .map_err(|e| crate::script::sweep_error(ctx, e))
+}
+
+/// A run report in a progress line: steps, energy residual, dt/dt_crit and, with contact,
+/// the capped steps and the largest penetration.
+fn report_note(rep: &crate::solve::RunReport) -> String {
+    let contact = rep.contact.as_ref().map_or(String::new(), |c| {
+        format!(
+            ", contact capped steps {}, max penetration {:.2e} m",
+            c.capped_steps, c.max_penetration_m
+        )
+    });
+    format!(
+        " ({} steps, energy residual {:.1e}, dt/dt_crit {:.3}{contact})",
+        rep.steps, rep.energy_residual_peak, rep.stability_ratio
+    )
+}
+
+/// Delay points from an array of maps #{delays: [...], amplitudes: [...]}: as many delays as
+/// amplitudes, delays finite and >= 0, amplitudes finite (checked here, so that a bad point
+/// is an error naming it, not a failed work unit).
 fn points(ctx: &NativeCallContext, list: &Array) -> ScriptResult<Vec<(Vec<f64>, Vec<f64>)>> {
     list.iter()
         .enumerate()
@@ -119,14 +220,35 @@ fn points(ctx: &NativeCallContext, list: &Array) -> ScriptResult<Vec<(Vec<f64>, 
                 map.get(name)
                     .ok_or_else(|| error(ctx, format!("points[{i}] has no field '{name}'")))
             };
-            Ok((
-                floats(ctx, field("delays")?, &format!("points[{i}].delays"))?,
-                floats(
+            let delays = floats(ctx, field("delays")?, &format!("points[{i}].delays"))?;
+            let amplitudes = floats(
+                ctx,
+                field("amplitudes")?,
+                &format!("points[{i}].amplitudes"),
+            )?;
+            if let Some(bad) = delays.iter().find(|d| !(d.is_finite() && **d >= 0.0)) {
+                return Err(error(
                     ctx,
-                    field("amplitudes")?,
-                    &format!("points[{i}].amplitudes"),
-                )?,
-            ))
+                    format!("points[{i}].delays has {bad}: delays must be finite and >= 0"),
+                ));
+            }
+            if let Some(bad) = amplitudes.iter().find(|a| !a.is_finite()) {
+                return Err(error(
+                    ctx,
+                    format!("points[{i}].amplitudes has {bad}: amplitudes must be finite"),
+                ));
+            }
+            if delays.len() != amplitudes.len() {
+                return Err(error(
+                    ctx,
+                    format!(
+                        "points[{i}] has {} delays and {} amplitudes: give one amplitude per delay",
+                        delays.len(),
+                        amplitudes.len()
+                    ),
+                ));
+            }
+            Ok((delays, amplitudes))
         })
         .collect()
 }
@@ -156,7 +278,7 @@ mod trnews_api {
     use crate::script::convert::{options, to_dynamic, WithPosition};
     use crate::script::scene::{index, SceneRef};
     use crate::signal::Signal;
-    use crate::trnews::{delayed_tr_news, tr_news, Delayed, Focus, Responder, TrNewsSpec};
+    use crate::trnews::{tr_news, Delayed, Focus, Responder, TrNewsSpec};
     use rhai::{Array, Dynamic, Map, NativeCallContext, FLOAT, INT};
     use std::sync::Arc;
 
@@ -337,7 +459,7 @@ mod trnews_api {
         to_dynamic(&ctx, &f.reports)
     }
 
-    /// Delayed TR-NEWS at receiver `k` for points [#{delays: [s...], amplitudes: [...]}]: simulations (in parallel) vs linear predictions; misfit over the focus window widened by half_window_s.
+    /// Delayed TR-NEWS at receiver `k` for points [#{delays: [s...], amplitudes: [...]}]: simulations (in parallel) vs linear predictions; misfit over the focus window widened by half_window_s. Each point is a work unit stored under points/delayed/ (a rerun computes only missing points; --shard I/N computes a share of the simulated points, --merge only assembles).
     #[rhai_fn(global, return_raw)]
     pub fn delayed(
         ctx: NativeCallContext,
@@ -353,7 +475,7 @@ mod trnews_api {
             .find(|f| f.receiver as INT == k)
             .ok_or_else(|| super::error(&ctx, format!("receiver {k} was not focused")))?;
         let points = points(&ctx, &list)?;
-        let results = delayed_tr_news(&r, &tr, focus, &points, half_window_s).at(&ctx)?;
+        let results = super::delayed_sweep(&ctx, &r, &tr, focus, &points, half_window_s)?;
         Ok(results.into_iter().map(Dynamic::from).collect())
     }
 

@@ -1,12 +1,12 @@
 //! Focusing measures: peak, -6 dB width, side lobes, relative L2 error.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::hilbert::envelope;
 use super::{finite, positive_finite, require_len, Signal, SignalError, GRID_TOL};
 
 /// The largest excursion of a signal.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Peak {
     /// Time of the sample with the largest `|x|` (s).
     pub time_s: f64,
@@ -18,7 +18,7 @@ pub struct Peak {
 }
 
 /// Main lobe and side lobes around a focusing time.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SideLobes {
     /// Peak inside the main-lobe window `focus +- half_width`.
     pub main_peak: Peak,

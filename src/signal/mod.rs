@@ -10,7 +10,7 @@
 //! - every operation validates its input and returns a [`SignalError`] naming
 //!   the offending field and value instead of panicking or producing NaN.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 mod chirp;
 mod delay;
@@ -127,7 +127,7 @@ fn num(v: &f64) -> String {
 }
 
 /// A uniformly sampled real signal: sample k is at time `t0_s + k*dt_s`.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Signal {
     /// Sample interval (s), positive and finite.
     pub dt_s: f64,

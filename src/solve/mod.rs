@@ -119,7 +119,7 @@ impl Default for RunConfig {
 
 /// What every run reports: cost and error indicators, scalars only (per-step series are
 /// in [`RunOutput`]).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RunReport {
     /// Integrator used.
     pub integrator: String,
