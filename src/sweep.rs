@@ -4,11 +4,12 @@
 //! amplitudes, `study::sweep` over any script-level points). Each finished point is written
 //! whole (temporary file + rename, [`crate::io::write_atomic`]) to its own file
 //! `points/<kind>/<key>.point` under the output directory. The key is the SHA-256 of a
-//! canonical JSON serialisation of everything that determines the point: the crate version,
-//! the kind of computation and its inputs (scene spec, TR-NEWS spec, the point). A run looks
-//! each point up by key and computes only the missing ones, so a sweep killed at any moment
-//! resumes where it stopped. The shared first pass of a sweep (impulse response, chirp run,
-//! correlation, focusing signals) is stored the same way by [`first_pass`].
+//! canonical JSON serialisation of everything that determines the point: the crate version
+//! and the hash of the sources it was built from, the kind of computation and its inputs
+//! (scene spec, TR-NEWS spec, the point). A run looks each point up by key and computes
+//! only the missing ones, so a sweep killed at any moment resumes where it stopped. The
+//! shared first pass of a sweep (impulse response, chirp run, correlation, focusing signals)
+//! is stored the same way by [`first_pass`].
 //!
 //! A point file is `postcard(PointFile)` followed by the SHA-256 of those bytes: a truncated
 //! or corrupted file fails the checksum (or the decoding), is reported and recomputed, never
@@ -136,8 +137,9 @@ impl Role {
     }
 }
 
-/// The key of a stored result: hex SHA-256 of the canonical JSON of (crate version, kind,
-/// inputs). serde_json writes struct fields in declaration order, maps sorted (its default
+/// The key of a stored result: hex SHA-256 of the canonical JSON of (crate version, hash of
+/// the sources the library was built from (see `build.rs`), kind, inputs): results of other
+/// code are never reused. serde_json writes struct fields in declaration order, maps sorted (its default
 /// `Map` is a BTreeMap) and floats in the shortest form that reads back to the same bits,
 /// so equal inputs give equal keys in every process and on every machine.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -146,7 +148,12 @@ pub struct Key(String);
 impl Key {
     /// The key of `inputs` for a computation of `kind`.
     pub fn of<I: Serialize + ?Sized>(kind: &str, inputs: &I) -> Result<Key> {
-        let text = serde_json::to_vec(&(env!("CARGO_PKG_VERSION"), kind, inputs))
+        let text = serde_json::to_vec(&(
+            env!("CARGO_PKG_VERSION"),
+            env!("TRNEWS_SOURCE_SHA256"),
+            kind,
+            inputs,
+        ))
             .map_err(|e| Error::Named(format!("cannot key a {kind} point: {e}")))?;
         Ok(Key(hex(&Sha256::digest(&text))))
     }

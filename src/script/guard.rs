@@ -1,35 +1,34 @@
 //! The host's last line of defence: a panic hook that records where a panic happened without
 //! printing it while a script runs (the host turns it into a one-line error instead).
 
-use std::cell::Cell;
-use std::sync::{Mutex, Once};
+use std::cell::{Cell, RefCell};
+use std::sync::Once;
 
 thread_local! {
     /// Guarded script runs on this thread (a panic here is then recorded, not printed).
     static GUARDED: Cell<usize> = const { Cell::new(0) };
+    /// Where the last panic on this thread happened, while guarded (hosts on other threads
+    /// keep their own).
+    static LOCATION: RefCell<Option<String>> = const { RefCell::new(None) };
 }
-static LOCATION: Mutex<Option<String>> = Mutex::new(None);
 
-/// Where the last recorded panic happened (Rust source file:line).
+/// Where the last recorded panic on this thread happened (Rust source file:line:column).
 pub fn panic_location() -> Option<String> {
-    LOCATION.lock().ok().and_then(|l| l.clone())
+    LOCATION.with(|l| l.borrow().clone())
 }
 
 /// Clears the panic location before a run, and installs the panic hook once.
 pub fn reset() {
-    if let Ok(mut l) = LOCATION.lock() {
-        *l = None;
-    }
+    LOCATION.with(|l| *l.borrow_mut() = None);
     static HOOK: Once = Once::new();
     HOOK.call_once(|| {
         let previous = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
             if GUARDED.with(Cell::get) > 0 {
-                if let Ok(mut l) = LOCATION.lock() {
-                    *l = info
-                        .location()
-                        .map(|l| format!("{}:{}:{}", l.file(), l.line(), l.column()));
-                }
+                let at = info
+                    .location()
+                    .map(|l| format!("{}:{}:{}", l.file(), l.line(), l.column()));
+                LOCATION.with(|l| *l.borrow_mut() = at);
             } else {
                 previous(info);
             }

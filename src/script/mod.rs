@@ -377,12 +377,14 @@ impl Host {
         self.context.finish();
         crate::budget::clear();
         match result? {
-            Err(e) if Self::shard_done(&e).is_some() => {
-                self.context
-                    .print(&Self::shard_done(&e).unwrap_or_default());
-                Ok(())
-            }
-            other => other.map_err(|e| self.render(name, &e)),
+            Ok(()) => Ok(()),
+            Err(e) => match Self::shard_done(&e) {
+                Some(message) => {
+                    self.context.print(&message);
+                    Ok(())
+                }
+                None => Err(self.render(name, &e)),
+            },
         }
     }
 
