@@ -495,6 +495,7 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
     });
     accuracy::register_types(&mut engine);
     signal::register_types(&mut engine);
+    laminate::register_types(&mut engine);
     scene::register_types(&mut engine);
     trnews::register_types(&mut engine);
     study::register_types(&mut engine);
@@ -634,6 +635,7 @@ fn script_type(rust: &str) -> String {
         "SceneRef" => "Scene",
         "RunRef" => "Run",
         "TrNewsRef" => "TrNews",
+        "LaminateRef" => "Laminate",
         other => other,
     }
     .to_string()
