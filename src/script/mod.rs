@@ -83,6 +83,9 @@ pub struct HostOptions {
     pub time_limit: Option<Duration>,
     /// Memory limit of one request (a scene, a run, a signal) in bytes (`--max-memory`).
     pub max_memory: u64,
+    /// Directory every data path read by a script is resolved under (`--data`); `None`: the
+    /// directory of the script file ([`Host::run_file`]).
+    pub data_dir: Option<PathBuf>,
 }
 
 impl Default for HostOptions {
@@ -94,6 +97,7 @@ impl Default for HostOptions {
             quiet: false,
             time_limit: None,
             max_memory: crate::budget::DEFAULT_MEMORY_LIMIT,
+            data_dir: None,
         }
     }
 }
@@ -148,6 +152,8 @@ fn one_line(message: &str) -> String {
 pub struct HostContext {
     out_dir: PathBuf,
     root: Option<crate::io::OutputRoot>,
+    /// The input root of `io::read_*`: `--data`, or the running script's directory.
+    data: RwLock<Option<crate::input::InputRoot>>,
     params: BTreeMap<String, Dynamic>,
     quiet: bool,
     script: RwLock<String>,
@@ -206,6 +212,17 @@ impl HostContext {
         Ok(self.out_dir.join(rel))
     }
 
+    /// The input directory every data file is read beneath, or an error saying how to set one.
+    pub fn data_root(&self) -> Result<crate::input::InputRoot, String> {
+        self.data
+            .read()
+            .ok()
+            .and_then(|d| d.clone())
+            .ok_or_else(|| {
+                "no data directory: run the script from a file or pass --data DIR".into()
+            })
+    }
+
     /// Prints a script message to stderr, prefixed with the script name, without
     /// tearing an active progress display.
     pub fn print(&self, text: &str) {
@@ -257,6 +274,8 @@ pub struct Host {
     max_operations: u64,
     time_limit: Option<Duration>,
     max_memory: u64,
+    /// True when `--data` was given; otherwise each script file's directory is its data root.
+    data_fixed: bool,
 }
 
 impl Host {
@@ -290,10 +309,17 @@ impl Host {
 
         let root = crate::io::OutputRoot::open(&options.out_dir)
             .map_err(|e| ScriptError::new(options.out_dir.display().to_string(), e.to_string()))?;
+        let data = options
+            .data_dir
+            .as_deref()
+            .map(crate::input::InputRoot::open)
+            .transpose()
+            .map_err(|e| ScriptError::new("--data", e.to_string()))?;
         crate::solve::show_progress(!options.quiet);
         let context = Arc::new(HostContext {
             out_dir: options.out_dir,
             root: Some(root),
+            data: RwLock::new(data),
             params: options.params,
             quiet: options.quiet,
             script: RwLock::new(String::new()),
@@ -306,6 +332,7 @@ impl Host {
             max_operations: options.max_operations,
             time_limit: options.time_limit,
             max_memory: options.max_memory,
+            data_fixed: options.data_dir.is_some(),
         })
     }
 
@@ -320,9 +347,21 @@ impl Host {
         self.compile(&name, &text).map(|_| ())
     }
 
-    /// Compiles and runs the script at `path`.
+    /// Compiles and runs the script at `path`. Without `--data`, data files are read beneath
+    /// the script's own directory, opened now.
     pub fn run_file(&self, path: &Path) -> Result<(), ScriptError> {
         let (name, text) = read_script(path)?;
+        if !self.data_fixed {
+            let dir = match path.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d,
+                _ => Path::new("."),
+            };
+            let root = crate::input::InputRoot::open(dir)
+                .map_err(|e| ScriptError::new(&name, e.to_string()))?;
+            if let Ok(mut d) = self.context.data.write() {
+                *d = Some(root);
+            }
+        }
         self.run_str(&name, &text)
     }
 
@@ -659,6 +698,7 @@ mod tests {
         HostContext {
             out_dir: dir.to_path_buf(),
             root: None,
+            data: RwLock::new(None),
             params: BTreeMap::new(),
             quiet: true,
             script: RwLock::new(String::new()),
