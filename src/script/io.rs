@@ -112,26 +112,54 @@ struct ReadOptions {
     time_column: Option<String>,
 }
 
-/// Largest data file a script may read: a quarter of the memory limit, because the file's
-/// bytes, its parsed values and the script's copies of them are held at once.
-fn read_limit() -> (u64, String) {
+/// A data file format and how many bytes of memory one byte of it can become at most: the
+/// file, its parsed values and the script's arrays (16 bytes per value) are held at once.
+#[derive(Clone, Copy)]
+enum Format {
+    /// 8-byte values: 8 (file) + 8 (parsed) + 16 (script) bytes per 8 bytes, 4x.
+    Npy,
+    /// Cells of at least 2 bytes ("1,"): 2 + 8 + 16 bytes per 2 bytes, 13x; 16x allowed.
+    Csv,
+    /// Numbers of at least 2 bytes ("1,"): 2 + 32 (JSON value) + 16 bytes per 2 bytes, 25x;
+    /// 32x allowed.
+    Json,
+}
+
+impl Format {
+    fn expansion(self) -> u64 {
+        match self {
+            Format::Npy => 4,
+            Format::Csv => 16,
+            Format::Json => 32,
+        }
+    }
+}
+
+/// Largest data file of `format` a script may read: the memory limit divided by the format's
+/// expansion, and why (for the message).
+fn read_limit(format: Format) -> (u64, String) {
     let max = crate::budget::memory_limit();
+    let k = format.expansion();
     (
-        max / 4,
+        max / k,
         format!(
-            "a quarter of --max-memory {}: the file, its values and their script copies are held at once",
+            "1/{k} of --max-memory {}: the file, its values and their script copies are held at once",
             crate::budget::format_bytes(max as f64)
         ),
     )
 }
 
 /// The bytes of data file `path` and its full path for messages, read beneath the data root.
-fn read_data(ctx: &NativeCallContext, path: &str) -> ScriptResult<(std::path::PathBuf, Vec<u8>)> {
+fn read_data(
+    ctx: &NativeCallContext,
+    path: &str,
+    format: Format,
+) -> ScriptResult<(std::path::PathBuf, Vec<u8>)> {
     use crate::script::convert::WithPosition;
     let root = crate::script::HostContext::of(ctx)?
         .data_root()
         .map_err(|m| error(ctx, m))?;
-    let (limit, why) = read_limit();
+    let (limit, why) = read_limit(format);
     let bytes = root.read(path, limit, &why).at(ctx)?;
     Ok((root.path().join(path), bytes))
 }
@@ -221,7 +249,7 @@ mod io_api {
                 "read_npy.time_column: only read_csv has a time column",
             ));
         }
-        let (full, bytes) = read_data(&ctx, path)?;
+        let (full, bytes) = read_data(&ctx, path, super::Format::Npy)?;
         let table = input::parse_npy(&full, &bytes).at(&ctx)?;
         let one = |i: usize, row: &[f64]| match opts.dt_s {
             Some(dt) => to_signal(&ctx, &opts, dt, row.to_vec(), &format!("{path} row {i}")),
@@ -258,7 +286,7 @@ mod io_api {
                 "read_csv: give dt_s or time_column, not both",
             ));
         }
-        let (full, bytes) = read_data(&ctx, path)?;
+        let (full, bytes) = read_data(&ctx, path, super::Format::Csv)?;
         let table = input::parse_csv(&full, &bytes).at(&ctx)?;
         let mut skip = None;
         if let Some(name) = &opts.time_column {
@@ -293,7 +321,7 @@ mod io_api {
     /// Reads a JSON document beneath the data directory as script values (objects become maps, arrays arrays).
     #[rhai_fn(return_raw)]
     pub fn read_json(ctx: NativeCallContext, path: &str) -> Res<Dynamic> {
-        let (full, bytes) = read_data(&ctx, path)?;
+        let (full, bytes) = read_data(&ctx, path, super::Format::Json)?;
         let value = input::parse_json(&full, &bytes).at(&ctx)?;
         rhai::serde::to_dynamic(&value).at(&ctx)
     }
