@@ -196,24 +196,24 @@ pub fn parse_npy(path: &Path, bytes: &[u8]) -> Result<Table, InputError> {
         npyz::DType::Plain(t) => t.to_string(),
         other => other.descr(),
     };
-    let (width, convert): (usize, fn(npyz::NpyFile<&[u8]>) -> std::io::Result<Vec<f64>>) =
-        match dtype.trim_start_matches(['<', '>', '|', '=']) {
-            "f8" => (8, |f| f.into_vec::<f64>()),
-            "f4" => (4, |f| {
-                Ok(f.into_vec::<f32>()?.into_iter().map(f64::from).collect())
-            }),
-            "i8" => (8, |f| {
-                Ok(f.into_vec::<i64>()?.into_iter().map(|v| v as f64).collect())
-            }),
-            "i4" => (4, |f| {
-                Ok(f.into_vec::<i32>()?.into_iter().map(f64::from).collect())
-            }),
-            _ => {
-                return Err(bad(format!(
-                    "dtype {dtype}: expected float64, float32, int64 or int32"
-                )))
-            }
-        };
+    type Convert = fn(npyz::NpyFile<&[u8]>) -> std::io::Result<Vec<f64>>;
+    let (width, convert): (usize, Convert) = match dtype.trim_start_matches(['<', '>', '|', '=']) {
+        "f8" => (8, |f| f.into_vec::<f64>()),
+        "f4" => (4, |f| {
+            Ok(f.into_vec::<f32>()?.into_iter().map(f64::from).collect())
+        }),
+        "i8" => (8, |f| {
+            Ok(f.into_vec::<i64>()?.into_iter().map(|v| v as f64).collect())
+        }),
+        "i4" => (4, |f| {
+            Ok(f.into_vec::<i32>()?.into_iter().map(f64::from).collect())
+        }),
+        _ => {
+            return Err(bad(format!(
+                "dtype {dtype}: expected float64, float32, int64 or int32"
+            )))
+        }
+    };
     // The header's shape must match the bytes that follow it: a forged header cannot make
     // the reader promise more values than the file holds.
     let count = shape.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
@@ -386,6 +386,48 @@ mod tests {
         assert!(e.contains("twice"), "{e}");
         assert!(parse_csv(p(), b"").is_err());
         assert!(parse_csv(p(), b"\xff\xfe,\n").is_err());
+    }
+
+    #[test]
+    fn mutated_files_never_panic() {
+        // Seeded byte flips, truncations and insertions of valid files: every parser returns
+        // Ok or an error, never a panic (a panic fails the test).
+        let mut npy = Vec::new();
+        {
+            use npyz::WriterBuilder;
+            let mut w = npyz::WriteOptions::<f64>::new()
+                .default_dtype()
+                .shape(&[3, 2])
+                .writer(&mut npy)
+                .begin_nd()
+                .expect("writer");
+            w.extend([1.0, 2.0, 3.0, 4.0, 5.0, 6.0]).expect("data");
+            w.finish().expect("finish");
+        }
+        let csv = b"t_s,a,\"b c\"\n0,1.5,2\n1e-8,-3,4e2\n".to_vec();
+        let json = br#"{"a": [1, 2.5, {"b": null}], "c": "x"}"#.to_vec();
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for case in 0..3000 {
+            let base = [&npy, &csv, &json][case % 3];
+            let mut bytes = base.clone();
+            for _ in 0..1 + next() % 4 {
+                let i = (next() % bytes.len().max(1) as u64) as usize;
+                match next() % 3 {
+                    0 if !bytes.is_empty() => bytes[i] = next() as u8,
+                    1 => bytes.truncate(i),
+                    _ => bytes.insert(i.min(bytes.len()), next() as u8),
+                }
+            }
+            let _ = parse_npy(p(), &bytes);
+            let _ = parse_csv(p(), &bytes);
+            let _ = parse_json(p(), &bytes);
+        }
     }
 
     #[test]

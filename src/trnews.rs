@@ -114,7 +114,7 @@ fn common_step(traces: &[Signal], what: &str) -> Result<f64> {
         t.validate()?;
         if (t.dt_s / first.dt_s - 1.0).abs() > 1e-9 {
             return Err(Error::invalid(
-                &format!("{what}[{i}].dt"),
+                format!("{what}[{i}].dt"),
                 t.dt_s,
                 format!("differs from {what}[0].dt = {}", first.dt_s),
             ));
@@ -216,7 +216,7 @@ impl Responder {
             let step = common_step(&r.received, &what)?;
             if (step / dt_s - 1.0).abs() > 1e-9 {
                 return Err(Error::invalid(
-                    &format!("{what}[0].dt"),
+                    format!("{what}[0].dt"),
                     step,
                     format!("differs from the drives' step {dt_s}"),
                 ));

@@ -28,8 +28,11 @@ pub fn module() -> Module {
     exported_module!(laminate_api)
 }
 
+/// Reads one field of a pair's draw.
+type DrawField = fn(&PairDraw) -> f64;
+
 /// The per-pair draw fields `draw_values` accepts, with their accessors.
-const DRAW_FIELDS: [(&str, fn(&PairDraw) -> f64); 7] = [
+const DRAW_FIELDS: [(&str, DrawField); 7] = [
     ("a_m", |d| d.a_m),
     ("b_m", |d| d.b_m),
     ("x_m", |d| d.x_m),
