@@ -1,5 +1,7 @@
 //! The TR-NEWS procedure (report Sec. 3, eqs 6-9), delayed TR-NEWS (eqs 10-11) and pulse
-//! inversion (Sec. 5.3) on a [`Scene`].
+//! inversion (Sec. 5.3) on a [`Channel`]: a simulated [`Scene`], a measured impulse response
+//! or recorded responses. The procedures only ask a [`Responder`] for the receivers' traces
+//! of a drive signal, so lab data and simulations go through the same code.
 //!
 //! A scene without a contacting crack is linear and time-invariant in discrete time: its
 //! response to any transmitted traction s is exactly y_n = sum_k s_k h_{n-k}, with h the
