@@ -99,7 +99,10 @@ pub fn spectra(path: &Path, title: &str, signals: &[(&str, &Signal)], max_mhz: f
     let mut psds = Vec::new();
     for (label, s) in signals {
         let segment = (s.len() / 4).max(16).min(s.len());
-        psds.push((label, signal::welch(s, segment, 0.5, Window::Hann)?));
+        psds.push((
+            label,
+            signal::welch(s, segment, 0.5, Window::Hann, signal::Detrend::None)?,
+        ));
     }
     let mut series = Vec::new();
     for (label, p) in &psds {

@@ -12,6 +12,7 @@ pub mod error;
 pub mod fem;
 pub mod figures;
 pub mod format;
+pub mod input;
 pub mod io;
 pub mod laminate;
 pub mod material;

@@ -35,6 +35,9 @@ struct Cli {
     /// Directory that every output path of the script is resolved under.
     #[arg(long, default_value = ".")]
     out: PathBuf,
+    /// Directory that every data path the script reads (io::read_npy, read_csv, read_json) is resolved under (default: the script's directory).
+    #[arg(long, value_name = "DIR")]
+    data: Option<PathBuf>,
     /// Script parameter NAME=VALUE (int, float, bool or string), read with param("NAME", default).
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
     set: Vec<(String, String)>,
@@ -145,6 +148,7 @@ fn run(cli: &Cli) -> Result<(), ScriptError> {
             std::env::var(v).ok()
         })
         .map_err(|e| ScriptError::new("--shard", e))?,
+        data_dir: cli.data.clone(),
     })?;
     if cli.api {
         print_api(&host);

@@ -154,7 +154,7 @@ impl Key {
             kind,
             inputs,
         ))
-            .map_err(|e| Error::Named(format!("cannot key a {kind} point: {e}")))?;
+        .map_err(|e| Error::Named(format!("cannot key a {kind} point: {e}")))?;
         Ok(Key(hex(&Sha256::digest(&text))))
     }
 

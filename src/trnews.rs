@@ -1,5 +1,7 @@
 //! The TR-NEWS procedure (report Sec. 3, eqs 6-9), delayed TR-NEWS (eqs 10-11) and pulse
-//! inversion (Sec. 5.3) on a [`Scene`].
+//! inversion (Sec. 5.3) on a [`Channel`]: a simulated [`Scene`], a measured impulse response
+//! or recorded responses. The procedures only ask a [`Responder`] for the receivers' traces
+//! of a drive signal, so lab data and simulations go through the same code.
 //!
 //! A scene without a contacting crack is linear and time-invariant in discrete time: its
 //! response to any transmitted traction s is exactly y_n = sum_k s_k h_{n-k}, with h the
@@ -32,17 +34,140 @@ pub struct Response {
 
 /// Answers "what do the receivers record when the transmitter sends s?". Cheap to clone.
 ///
-/// With an error estimate ([`Responder::with_companions`]) it also holds companions on
-/// the same scene with 2x and 4x the element sizes, and every procedure below repeats itself
-/// on them and reports Richardson estimates of its results (see [`crate::accuracy`]).
+/// The TR-NEWS procedures below ([`tr_news`], [`delayed_tr_news`], [`pulse_inversion`]) only
+/// ask this question, so they run on any [`Channel`]: a simulated scene, a measured impulse
+/// response, or recorded responses.
+///
+/// With an error estimate ([`Responder::with_companions`], simulated scenes only) it also
+/// holds companions on the same scene with 2x and 4x the element sizes, and every procedure
+/// below repeats itself on them and reports Richardson estimates of its results (see
+/// [`crate::accuracy`]).
 #[derive(Clone, Debug)]
 pub struct Responder {
-    scene: Arc<Scene>,
+    channel: Channel,
     dt_s: f64,
-    /// Response to a unit impulse, per receiver, when the scene is linear.
-    impulse: Option<Arc<Response>>,
     /// Companions with 2x and 4x the element sizes; empty without an error estimate.
     companions: Vec<Responder>,
+}
+
+/// What answers a transmission.
+#[derive(Clone, Debug)]
+pub enum Channel {
+    /// A simulated scene, through its transducers.
+    Scene {
+        /// The scene.
+        scene: Arc<Scene>,
+        /// Response to a unit impulse, per receiver, when the scene is linear: every
+        /// transmission is then a convolution with it.
+        impulse: Option<Arc<Response>>,
+    },
+    /// A measured linear, time-invariant channel: one impulse response per receiver.
+    Impulse(Arc<ImpulseChannel>),
+    /// Recorded responses to known transmissions (lab data).
+    Recorded(Arc<RecordedChannel>),
+}
+
+/// A measured channel: receiver r records y_r[n] = sum_k s[k] h_r[n - k] for the drive s
+/// (the discrete convolution with its response h_r to a unit drive sample at step 0,
+/// transducers included).
+#[derive(Clone, Debug)]
+pub struct ImpulseChannel {
+    /// h_r per receiver, from t = 0, all on one step.
+    pub impulse: Vec<Signal>,
+    /// Peak of the drive signals (the chirp's amplitude and the focusing signals' peak).
+    pub peak_drive: f64,
+    /// The band the traces were recorded in, for titles and printed results.
+    pub band: String,
+}
+
+/// One recorded transmission: the drive sent and what every receiver recorded.
+#[derive(Clone, Debug)]
+pub struct Recording {
+    /// The drive signal sent.
+    pub sent: Signal,
+    /// One trace per receiver, from t = 0 on the drive's step.
+    pub received: Vec<Signal>,
+}
+
+/// Recorded responses: a transmission is answered by the recording of the same drive
+/// (relative L2 difference at most [`RecordedChannel::MATCH`]), and refused otherwise.
+#[derive(Clone, Debug)]
+pub struct RecordedChannel {
+    /// The recordings.
+    pub recordings: Vec<Recording>,
+    /// Peak of the drive signals.
+    pub peak_drive: f64,
+    /// The band the traces were recorded in.
+    pub band: String,
+}
+
+impl RecordedChannel {
+    /// Largest relative L2 difference between a drive and a recording's drive for the
+    /// recording to answer it: round-off of a drive written to a file and read back.
+    pub const MATCH: f64 = 1e-9;
+}
+
+/// The step shared by every trace of a channel, or an error naming `what` and the trace.
+fn common_step(traces: &[Signal], what: &str) -> Result<f64> {
+    let first = traces
+        .first()
+        .ok_or_else(|| Error::invalid(what, "[]", "needs at least one receiver's trace"))?;
+    for (i, t) in traces.iter().enumerate() {
+        t.validate()?;
+        if (t.dt_s / first.dt_s - 1.0).abs() > 1e-9 {
+            return Err(Error::invalid(
+                format!("{what}[{i}].dt"),
+                t.dt_s,
+                format!("differs from {what}[0].dt = {}", first.dt_s),
+            ));
+        }
+    }
+    Ok(first.dt_s)
+}
+
+/// Refuses a drive peak that is not finite and positive.
+fn positive_peak(peak_drive: f64) -> Result<()> {
+    if peak_drive.is_finite() && peak_drive > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            "peak_drive",
+            peak_drive,
+            "must be finite and > 0",
+        ))
+    }
+}
+
+/// What determines a channel's answers, in the keys of stored results (see [`crate::sweep`]).
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ChannelIdentity<'a> {
+    /// A simulated scene: its spec, step and, when convolving, the impulse response's length.
+    Scene {
+        /// The scene's spec.
+        spec: &'a crate::scene::SceneSpec,
+        /// The step of its runs (s).
+        dt_s: f64,
+        /// Samples of the stored impulse response, for a linear scene.
+        impulse_length: Option<usize>,
+    },
+    /// Measured data (impulse responses or recordings): the SHA-256 of its exact samples.
+    Data {
+        /// Hex SHA-256 of the data's f64 bits.
+        sha256: String,
+    },
+}
+
+impl ChannelIdentity<'_> {
+    fn data<T: Serialize>(data: &T) -> Result<ChannelIdentity<'static>> {
+        use sha2::{Digest, Sha256};
+        let bytes = crate::sweep::encode(data)?;
+        let sha256 = Sha256::digest(&bytes)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        Ok(ChannelIdentity::Data { sha256 })
+    }
 }
 
 impl Responder {
@@ -50,9 +175,11 @@ impl Responder {
     pub fn simulating(scene: Arc<Scene>) -> Responder {
         let dt_s = scene.default_dt_s();
         Responder {
-            scene,
+            channel: Channel::Scene {
+                scene,
+                impulse: None,
+            },
             dt_s,
-            impulse: None,
             companions: Vec::new(),
         }
     }
@@ -60,43 +187,156 @@ impl Responder {
     /// For a linear scene, runs the impulse response once (over `duration_s`) and convolves
     /// afterwards; for a nonlinear scene, the same as [`Responder::simulating`].
     pub fn new(scene: Arc<Scene>, duration_s: f64) -> Result<Responder> {
-        let mut r = Self::simulating(scene);
-        if r.scene.is_linear() {
+        let dt_s = scene.default_dt_s();
+        let mut impulse = None;
+        if scene.is_linear() {
             let unit = Signal {
-                dt_s: r.dt_s,
+                dt_s,
                 t0_s: 0.0,
                 samples: vec![1.0],
             };
+            let config = crate::solve::RunConfig {
+                dt_s: Some(dt_s),
+                ..scene.run_config(duration_s)
+            };
             // The first pass of every later response: stored with the sweep's points.
-            let inputs = (&r.scene.spec, r.dt_s, duration_s);
+            let inputs = (&scene.spec, dt_s, duration_s);
             let response =
                 crate::sweep::first_pass("impulse_response", "impulse response", &inputs, || {
-                    let out = r.scene.apply_traction(&unit, &r.run_config(duration_s))?;
+                    let out = scene.apply_traction(&unit, &config)?;
                     Ok(Response {
                         traces: out.traces,
                         report: Some(out.report),
                     })
                 })?;
-            r.impulse = Some(Arc::new(response));
+            impulse = Some(Arc::new(response));
         }
-        Ok(r)
+        Ok(Responder {
+            channel: Channel::Scene { scene, impulse },
+            dt_s,
+            companions: Vec::new(),
+        })
     }
 
-    /// True when responses are convolutions with a stored impulse response (a linear
-    /// scene), false when every transmission is simulated.
-    pub fn convolves(&self) -> bool {
-        self.impulse.is_some()
+    /// A measured channel from one impulse response per receiver (see [`ImpulseChannel`]).
+    pub fn from_impulse(impulse: Vec<Signal>, peak_drive: f64, band: String) -> Result<Responder> {
+        let dt_s = common_step(&impulse, "impulse")?;
+        positive_peak(peak_drive)?;
+        Ok(Responder {
+            channel: Channel::Impulse(Arc::new(ImpulseChannel {
+                impulse,
+                peak_drive,
+                band,
+            })),
+            dt_s,
+            companions: Vec::new(),
+        })
+    }
+
+    /// A channel of recorded responses (see [`RecordedChannel`]); every drive and trace on
+    /// one step, every recording with the same number of receivers.
+    pub fn from_recordings(
+        recordings: Vec<Recording>,
+        peak_drive: f64,
+        band: String,
+    ) -> Result<Responder> {
+        positive_peak(peak_drive)?;
+        let drives: Vec<Signal> = recordings.iter().map(|r| r.sent.clone()).collect();
+        let dt_s = common_step(&drives, "recordings.sent")?;
+        let receivers = recordings[0].received.len();
+        for (i, r) in recordings.iter().enumerate() {
+            let what = format!("recordings[{i}].received");
+            if r.received.len() != receivers {
+                return Err(Error::invalid(
+                    &what,
+                    format!("{} traces", r.received.len()),
+                    format!("recordings[0] has {receivers}"),
+                ));
+            }
+            let step = common_step(&r.received, &what)?;
+            if (step / dt_s - 1.0).abs() > 1e-9 {
+                return Err(Error::invalid(
+                    format!("{what}[0].dt"),
+                    step,
+                    format!("differs from the drives' step {dt_s}"),
+                ));
+            }
+        }
+        Ok(Responder {
+            channel: Channel::Recorded(Arc::new(RecordedChannel {
+                recordings,
+                peak_drive,
+                band,
+            })),
+            dt_s,
+            companions: Vec::new(),
+        })
+    }
+
+    /// The channel that answers transmissions.
+    pub fn channel(&self) -> &Channel {
+        &self.channel
+    }
+
+    /// The simulated scene, when the channel is one.
+    fn scene(&self) -> Result<&Arc<Scene>> {
+        match &self.channel {
+            Channel::Scene { scene, .. } => Ok(scene),
+            _ => Err(Error::invalid(
+                "error_estimate",
+                true,
+                "needs a simulated scene; a measured or recorded channel has no mesh to refine",
+            )),
+        }
+    }
+
+    /// Peak of the transmitted drive signals: the scene transmitter's peak traction (Pa), or
+    /// a measured channel's drive peak.
+    pub fn peak_drive(&self) -> f64 {
+        match &self.channel {
+            Channel::Scene { scene, .. } => scene.spec.transmitter.peak_pa,
+            Channel::Impulse(c) => c.peak_drive,
+            Channel::Recorded(c) => c.peak_drive,
+        }
+    }
+
+    /// The band every response is seen through, for titles and printed results.
+    pub fn band(&self) -> String {
+        match &self.channel {
+            Channel::Scene { scene, .. } => {
+                crate::transducer::band_label(scene.spec.transducer.as_ref())
+            }
+            Channel::Impulse(c) => c.band.clone(),
+            Channel::Recorded(c) => c.band.clone(),
+        }
+    }
+
+    /// True when every transmission is simulated (a nonlinear scene); false when answers
+    /// are convolutions with an impulse response or recorded responses (cheap to recompute).
+    pub fn simulates(&self) -> bool {
+        matches!(self.channel, Channel::Scene { impulse: None, .. })
     }
 
     /// Everything that determines this responder's answers, for the keys of stored
-    /// results: per discretisation (this one, then the companions) the scene spec, the
-    /// step and, when convolving, the impulse response's length.
-    pub fn identity(&self) -> Vec<(&crate::scene::SceneSpec, f64, Option<usize>)> {
+    /// results: per discretisation (this one, then the companions) its [`ChannelIdentity`].
+    pub fn identity(&self) -> Result<Vec<ChannelIdentity<'_>>> {
         std::iter::once(self)
             .chain(&self.companions)
-            .map(|r| {
-                let length = r.impulse.as_ref().map(|h| h.traces[0].len());
-                (&r.scene.spec, r.dt_s, length)
+            .map(|r| match &r.channel {
+                Channel::Scene { scene, impulse } => Ok(ChannelIdentity::Scene {
+                    spec: &scene.spec,
+                    dt_s: r.dt_s,
+                    impulse_length: impulse.as_ref().map(|h| h.traces[0].len()),
+                }),
+                Channel::Impulse(c) => ChannelIdentity::data(&(&c.impulse, c.peak_drive)),
+                Channel::Recorded(c) => {
+                    let pairs: Vec<(&Signal, &Vec<Signal>)> = c
+                        .recordings
+                        .iter()
+                        .map(|r| (&r.sent, &r.received))
+                        .collect();
+                    ChannelIdentity::data(&(pairs, c.peak_drive))
+                }
             })
             .collect()
     }
@@ -107,16 +347,17 @@ impl Responder {
     /// (dt / dt_c). About 1/8 + 1/64 where every layer coarsens, more where thin layers keep
     /// one element row or set the step. Building them runs no simulation.
     pub fn companion_scenes(&self) -> Result<(Vec<Arc<Scene>>, f64)> {
+        let scene = self.scene()?;
         let scenes = [2.0, 4.0]
             .into_iter()
-            .map(|factor| Ok(Arc::new(Scene::build(&self.scene.spec.coarsened(factor))?)))
+            .map(|factor| Ok(Arc::new(Scene::build(&scene.spec.coarsened(factor))?)))
             .collect::<Result<Vec<_>>>()?;
         let work = |s: &Scene, dt: f64| s.model.dofs() as f64 / dt;
         let cost = scenes
             .iter()
             .map(|s| work(s, s.default_dt_s()))
             .sum::<f64>()
-            / work(&self.scene, self.dt_s);
+            / work(scene, self.dt_s);
         Ok((scenes, cost))
     }
 
@@ -127,10 +368,18 @@ impl Responder {
         scenes: Vec<Arc<Scene>>,
         duration_s: f64,
     ) -> Result<Responder> {
+        let convolving = matches!(
+            self.channel,
+            Channel::Scene {
+                impulse: Some(_),
+                ..
+            }
+        );
+        self.scene()?;
         self.companions = scenes
             .into_iter()
             .map(|scene| {
-                if self.impulse.is_some() {
+                if convolving {
                     Responder::new(scene, duration_s)
                 } else {
                     Ok(Responder::simulating(scene))
@@ -150,67 +399,56 @@ impl Responder {
         self.dt_s
     }
 
-    /// The impulse-response run's report, when responses are convolved.
+    /// The impulse-response run's report, when a simulated scene's responses are convolved.
     pub fn impulse_report(&self) -> Option<&RunReport> {
-        self.impulse.as_ref().and_then(|i| i.report.as_ref())
-    }
-
-    fn run_config(&self, duration_s: f64) -> crate::solve::RunConfig {
-        crate::solve::RunConfig {
-            dt_s: Some(self.dt_s),
-            ..self.scene.run_config(duration_s)
+        match &self.channel {
+            Channel::Scene {
+                impulse: Some(i), ..
+            } => i.report.as_ref(),
+            _ => None,
         }
     }
 
-    /// Receivers' responses to the drive signal `s` (Pa) over `duration_s`, through the
-    /// scene's transducers.
+    /// Receivers' responses to the drive signal `s` (Pa for a scene) over `duration_s`,
+    /// through the scene's transducers.
     pub fn respond(&self, s: &Signal, duration_s: f64) -> Result<Response> {
         let s = if (s.dt_s / self.dt_s - 1.0).abs() > 1e-9 {
             signal::resample(s, self.dt_s)?
         } else {
             s.clone()
         };
-        match &self.impulse {
-            Some(h) => {
-                let n = (duration_s / self.dt_s).round() as usize;
-                if n > h.traces[0].len() {
-                    return Err(Error::invalid(
-                        "duration_s",
-                        duration_s,
-                        format!(
-                            "exceeds the impulse response length {:.4e} s",
-                            h.traces[0].duration_s()
-                        ),
-                    ));
-                }
-                let transducer = self.scene.spec.transducer.as_ref();
-                let traction = match transducer {
-                    Some(t) => t.transmit(&s, duration_s)?,
-                    None => s,
+        match &self.channel {
+            Channel::Scene {
+                scene,
+                impulse: Some(h),
+            } => convolved(scene, h, s, self.dt_s, duration_s),
+            Channel::Scene {
+                scene,
+                impulse: None,
+            } => {
+                let config = crate::solve::RunConfig {
+                    dt_s: Some(self.dt_s),
+                    ..scene.run_config(duration_s)
                 };
-                let traces = h
-                    .traces
+                let out = scene.transmit(&s, &config)?;
+                Ok(Response {
+                    traces: out.traces,
+                    report: Some(out.report),
+                })
+            }
+            Channel::Impulse(c) => {
+                let n = samples_within(&c.impulse[0], self.dt_s, duration_s)?;
+                let traces = c
+                    .impulse
                     .iter()
-                    .map(|h| {
-                        let raw = truncate(signal::convolve_discrete(&traction, h)?, n);
-                        match transducer {
-                            Some(t) => t.receive(&raw),
-                            None => Ok(raw),
-                        }
-                    })
+                    .map(|h| Ok(truncate(signal::convolve_discrete(&s, h)?, n)))
                     .collect::<Result<Vec<_>>>()?;
                 Ok(Response {
                     traces,
                     report: None,
                 })
             }
-            None => {
-                let out = self.scene.transmit(&s, &self.run_config(duration_s))?;
-                Ok(Response {
-                    traces: out.traces,
-                    report: Some(out.report),
-                })
-            }
+            Channel::Recorded(c) => recorded(c, &s, self.dt_s, duration_s),
         }
     }
 
@@ -222,6 +460,91 @@ impl Responder {
             .map(|s| self.respond(s, duration_s))
             .collect()
     }
+}
+
+/// A linear scene's response by convolution with its raw impulse response h, through the
+/// transducers: B * (h * (B * s)).
+fn convolved(
+    scene: &Scene,
+    h: &Response,
+    s: Signal,
+    dt_s: f64,
+    duration_s: f64,
+) -> Result<Response> {
+    let n = samples_within(&h.traces[0], dt_s, duration_s)?;
+    let transducer = scene.spec.transducer.as_ref();
+    let traction = match transducer {
+        Some(t) => t.transmit(&s, duration_s)?,
+        None => s,
+    };
+    let traces = h
+        .traces
+        .iter()
+        .map(|h| {
+            let raw = truncate(signal::convolve_discrete(&traction, h)?, n);
+            match transducer {
+                Some(t) => t.receive(&raw),
+                None => Ok(raw),
+            }
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Response {
+        traces,
+        report: None,
+    })
+}
+
+/// The number of samples of `duration_s` on step `dt_s`, refused when the impulse response
+/// `h` is shorter.
+fn samples_within(h: &Signal, dt_s: f64, duration_s: f64) -> Result<usize> {
+    let n = (duration_s / dt_s).round() as usize;
+    if n > h.len() {
+        return Err(Error::invalid(
+            "duration_s",
+            duration_s,
+            format!(
+                "exceeds the impulse response length {:.4e} s",
+                h.duration_s()
+            ),
+        ));
+    }
+    Ok(n)
+}
+
+/// The recording of drive `s` over `duration_s`, or an error saying that this drive was not
+/// recorded (with its peak and length, to find it among the files).
+fn recorded(c: &RecordedChannel, s: &Signal, dt_s: f64, duration_s: f64) -> Result<Response> {
+    let same = |r: &&Recording| {
+        r.sent.len() == s.len()
+            && signal::relative_l2(&r.sent, s, None).is_ok_and(|d| d <= RecordedChannel::MATCH)
+    };
+    let Some(r) = c.recordings.iter().find(same) else {
+        return Err(Error::invalid(
+            "transmission",
+            format!("{} samples, peak {:.6e}", s.len(), s.max_abs()),
+            format!(
+                "was not recorded: none of the {} recordings sent this drive (relative L2 \
+                 difference <= {:e}); send it, record the receivers and add the recording",
+                c.recordings.len(),
+                RecordedChannel::MATCH
+            ),
+        ));
+    };
+    let n = (duration_s / dt_s).round() as usize;
+    if let Some(short) = r.received.iter().find(|t| t.len() < n) {
+        return Err(Error::invalid(
+            "duration_s",
+            duration_s,
+            format!(
+                "exceeds the recording of this drive ({:.4e} s)",
+                short.duration_s()
+            ),
+        ));
+    }
+    Ok(Response {
+        traces: r.received.iter().map(|t| truncate(t.clone(), n)).collect(),
+        report: None,
+    })
 }
 
 /// The first n samples on the grid starting at t = 0 (zero-padded if shorter).
@@ -394,7 +717,7 @@ impl TrNewsSpec {
 /// on the responder's companions, with the error estimates of every focus. This first pass
 /// of a sweep is stored with its points (see [`crate::sweep::first_pass`]).
 pub fn tr_news(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
-    let inputs = (responder.identity(), spec);
+    let inputs = (responder.identity()?, spec);
     crate::sweep::first_pass("tr_news", "TR-NEWS first pass", &inputs, || {
         tr_news_computed(responder, spec)
     })
@@ -480,7 +803,7 @@ fn spec_field(e: Error, names: &[(&str, &str)]) -> Error {
 }
 
 fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
-    let peak_pa = responder.scene.spec.transmitter.peak_pa;
+    let peak_pa = responder.peak_drive();
     let chirp = signal::chirp(
         spec.f0_hz,
         spec.f1_hz,
@@ -560,7 +883,7 @@ fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
         focus,
         chirp_report: first.report,
         companions: Vec::new(),
-        band: crate::transducer::band_label(responder.scene.spec.transducer.as_ref()),
+        band: responder.band(),
     })
 }
 

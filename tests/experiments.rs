@@ -56,6 +56,9 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         "convergence.csv",
         "convergence.png",
         "spectra_mean_frequency.csv",
+        "measured_channel.csv",
+        "measured_channel_fig22.png",
+        "measured_channel_h.npy",
     ] {
         let path = out.join("plots").join(file);
         let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));

@@ -1,4 +1,6 @@
-//! Rhai module `io`: CSV, JSON and NPY outputs, every path resolved under the output dir.
+//! Rhai module `io`: CSV, JSON and NPY outputs, every path resolved under the output dir, and
+//! NPY, CSV and JSON inputs, every path resolved beneath the data dir (`--data`, default the
+//! script's directory; see [`crate::input`]).
 
 use crate::script::convert::{error, floats, rows, ScriptResult};
 use crate::signal::{Signal, Spectrum};
@@ -97,15 +99,232 @@ fn allow_non_finite(ctx: &NativeCallContext, options: Map) -> ScriptResult<bool>
     Ok(allow)
 }
 
+/// Options of the readers: a sample step turns columns (CSV) or rows (NPY) into Signals.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct ReadOptions {
+    /// Sample step (s): columns or rows become Signals on this step.
+    dt_s: Option<f64>,
+    /// Time of the first sample (s), with `dt_s`.
+    t0_s: f64,
+    /// CSV only: the column holding uniformly spaced times; the other columns become Signals
+    /// on its step and start.
+    time_column: Option<String>,
+}
+
+/// A data file format and how many bytes of memory one byte of it can become at most: the
+/// file, its parsed values and the script's arrays (16 bytes per value) are held at once.
+#[derive(Clone, Copy)]
+enum Format {
+    /// 8-byte values: 8 (file) + 8 (parsed) + 16 (script) bytes per 8 bytes, 4x.
+    Npy,
+    /// Cells of at least 2 bytes ("1,"): 2 + 8 + 16 bytes per 2 bytes, 13x; 16x allowed.
+    Csv,
+    /// Numbers of at least 2 bytes ("1,"): 2 + 32 (JSON value) + 16 bytes per 2 bytes, 25x;
+    /// 32x allowed.
+    Json,
+}
+
+impl Format {
+    fn expansion(self) -> u64 {
+        match self {
+            Format::Npy => 4,
+            Format::Csv => 16,
+            Format::Json => 32,
+        }
+    }
+}
+
+/// Largest data file of `format` a script may read: the memory limit divided by the format's
+/// expansion, and why (for the message).
+fn read_limit(format: Format) -> (u64, String) {
+    let max = crate::budget::memory_limit();
+    let k = format.expansion();
+    (
+        max / k,
+        format!(
+            "1/{k} of --max-memory {}: the file, its values and their script copies are held at once",
+            crate::budget::format_bytes(max as f64)
+        ),
+    )
+}
+
+/// The bytes of data file `path` and its full path for messages, read beneath the data root.
+fn read_data(
+    ctx: &NativeCallContext,
+    path: &str,
+    format: Format,
+) -> ScriptResult<(std::path::PathBuf, Vec<u8>)> {
+    use crate::script::convert::WithPosition;
+    let root = crate::script::HostContext::of(ctx)?
+        .data_root()
+        .map_err(|m| error(ctx, m))?;
+    let (limit, why) = read_limit(format);
+    let bytes = root.read(path, limit, &why).at(ctx)?;
+    Ok((root.path().join(path), bytes))
+}
+
+/// A Signal on the options' step, naming `what` when the step is invalid.
+fn to_signal(
+    ctx: &NativeCallContext,
+    options: &ReadOptions,
+    dt_s: f64,
+    samples: Vec<f64>,
+    what: &str,
+) -> ScriptResult<Dynamic> {
+    use crate::script::convert::WithPosition;
+    Signal::new(dt_s, options.t0_s, samples)
+        .map(Dynamic::from)
+        .map_err(|e| e.to_string())
+        .map_err(|m| format!("{what}: {m}"))
+        .at(ctx)
+}
+
+/// Numbers as a Rhai array.
+fn number_array(values: &[f64]) -> Dynamic {
+    Dynamic::from_array(values.iter().map(|&v| Dynamic::from_float(v)).collect())
+}
+
+/// The step and start of a uniformly spaced time column: dt from its ends, each time within
+/// 1e-6 dt of t0 + k dt (round-off of printed times), otherwise an error naming the row.
+fn uniform_times(ctx: &NativeCallContext, name: &str, t: &[f64]) -> ScriptResult<(f64, f64)> {
+    let n = t.len();
+    if n < 2 {
+        return Err(error(
+            ctx,
+            format!("time column '{name}' has {n} values; need at least 2"),
+        ));
+    }
+    let dt = (t[n - 1] - t[0]) / (n - 1) as f64;
+    if !(dt > 0.0) {
+        return Err(error(
+            ctx,
+            format!(
+                "time column '{name}' does not increase ({} to {})",
+                t[0],
+                t[n - 1]
+            ),
+        ));
+    }
+    if let Some(k) = (0..n).find(|&k| (t[k] - t[0] - k as f64 * dt).abs() > 1e-6 * dt) {
+        return Err(error(
+            ctx,
+            format!(
+                "time column '{name}' is not uniformly spaced: row {} has t = {} where {} is expected (dt = {dt})",
+                k + 1,
+                t[k],
+                t[0] + k as f64 * dt
+            ),
+        ));
+    }
+    Ok((dt, t[0]))
+}
+
 #[export_module]
 mod io_api {
     use super::{npy_data, plain};
+    use super::{number_array, read_data, to_signal, uniform_times, ReadOptions};
+    use crate::input;
     use crate::io;
+    use crate::script::convert::options;
     use crate::script::convert::{rows, strings, WithPosition};
     use crate::script::HostContext;
     use rhai::{Array, Dynamic, Map, NativeCallContext};
 
     type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
+
+    /// Reads a 1-D or 2-D .npy array (float64, float32, int64 or int32) beneath the data directory (--data, default the script's directory): an array of numbers, or an array of rows.
+    #[rhai_fn(return_raw)]
+    pub fn read_npy(ctx: NativeCallContext, path: &str) -> Res<Dynamic> {
+        read_npy_with(ctx, path, Map::new())
+    }
+
+    /// read_npy with options #{dt_s, t0_s}: with dt_s a 1-D array becomes a Signal and a 2-D array an array of Signals, one per row.
+    #[rhai_fn(name = "read_npy", return_raw)]
+    pub fn read_npy_with(ctx: NativeCallContext, path: &str, options_map: Map) -> Res<Dynamic> {
+        let opts: ReadOptions = options(&ctx, options_map, &ReadOptions::default(), "read_npy")?;
+        if opts.time_column.is_some() {
+            return Err(super::error(
+                &ctx,
+                "read_npy.time_column: only read_csv has a time column",
+            ));
+        }
+        let (full, bytes) = read_data(&ctx, path, super::Format::Npy)?;
+        let table = input::parse_npy(&full, &bytes).at(&ctx)?;
+        let one = |i: usize, row: &[f64]| match opts.dt_s {
+            Some(dt) => to_signal(&ctx, &opts, dt, row.to_vec(), &format!("{path} row {i}")),
+            None => Ok(number_array(row)),
+        };
+        // parse_npy reads 1-D and 2-D arrays only
+        let [_, cols] = table.shape[..] else {
+            return one(0, &table.values);
+        };
+        Ok(Dynamic::from_array(
+            table
+                .values
+                .chunks(cols.max(1))
+                .enumerate()
+                .map(|(i, r)| one(i, r))
+                .collect::<Res<Array>>()?,
+        ))
+    }
+
+    /// Reads a CSV file with a header row and numeric cells beneath the data directory: a map from each header to its column, an array of numbers.
+    #[rhai_fn(return_raw)]
+    pub fn read_csv(ctx: NativeCallContext, path: &str) -> Res<Map> {
+        read_csv_with(ctx, path, Map::new())
+    }
+
+    /// read_csv with options #{dt_s, t0_s} (every column becomes a Signal on that step) or #{time_column} (the other columns become Signals on that uniformly spaced column's step and start).
+    #[rhai_fn(name = "read_csv", return_raw)]
+    pub fn read_csv_with(ctx: NativeCallContext, path: &str, options_map: Map) -> Res<Map> {
+        let mut opts: ReadOptions =
+            options(&ctx, options_map, &ReadOptions::default(), "read_csv")?;
+        if opts.dt_s.is_some() && opts.time_column.is_some() {
+            return Err(super::error(
+                &ctx,
+                "read_csv: give dt_s or time_column, not both",
+            ));
+        }
+        let (full, bytes) = read_data(&ctx, path, super::Format::Csv)?;
+        let table = input::parse_csv(&full, &bytes).at(&ctx)?;
+        let mut skip = None;
+        if let Some(name) = &opts.time_column {
+            let i = table.headers.iter().position(|h| h == name).ok_or_else(|| {
+                super::error(
+                    &ctx,
+                    format!(
+                        "read_csv.time_column = \"{name}\": {path} has no such column (columns: {})",
+                        table.headers.join(", ")
+                    ),
+                )
+            })?;
+            let (dt, t0) = uniform_times(&ctx, name, &table.columns[i])?;
+            opts.dt_s = Some(dt);
+            opts.t0_s = t0;
+            skip = Some(i);
+        }
+        let mut out = Map::new();
+        for (i, (h, c)) in table.headers.iter().zip(table.columns).enumerate() {
+            if Some(i) == skip {
+                continue;
+            }
+            let value = match opts.dt_s {
+                Some(dt) => to_signal(&ctx, &opts, dt, c, &format!("{path} column '{h}'"))?,
+                None => number_array(&c),
+            };
+            out.insert(h.as_str().into(), value);
+        }
+        Ok(out)
+    }
+
+    /// Reads a JSON document beneath the data directory as script values (objects become maps, arrays arrays).
+    #[rhai_fn(return_raw)]
+    pub fn read_json(ctx: NativeCallContext, path: &str) -> Res<Dynamic> {
+        let (full, bytes) = read_data(&ctx, path, super::Format::Json)?;
+        let value = input::parse_json(&full, &bytes).at(&ctx)?;
+        rhai::serde::to_dynamic(&value).at(&ctx)
+    }
 
     /// Writes numeric columns (arrays or Signals' samples) as CSV with one header per column; NaN and infinities are refused.
     #[rhai_fn(return_raw)]

@@ -83,6 +83,9 @@ pub struct HostOptions {
     /// What the run does with sweep points not stored yet: all, a shard's share, or none
     /// (`--shard`, `--merge`; see [`crate::sweep`]).
     pub sweep: crate::sweep::Role,
+    /// Directory every data path read by a script is resolved under (`--data`); `None`: the
+    /// directory of the script file ([`Host::run_file`]).
+    pub data_dir: Option<PathBuf>,
 }
 
 impl Default for HostOptions {
@@ -95,6 +98,7 @@ impl Default for HostOptions {
             time_limit: None,
             max_memory: crate::budget::DEFAULT_MEMORY_LIMIT,
             sweep: crate::sweep::Role::Whole,
+            data_dir: None,
         }
     }
 }
@@ -149,6 +153,8 @@ fn one_line(message: &str) -> String {
 pub struct HostContext {
     out_dir: PathBuf,
     root: Option<crate::io::OutputRoot>,
+    /// The input root of `io::read_*`: `--data`, or the running script's directory.
+    data: RwLock<Option<crate::input::InputRoot>>,
     params: BTreeMap<String, Dynamic>,
     quiet: bool,
     script: RwLock<String>,
@@ -207,6 +213,17 @@ impl HostContext {
         Ok(self.out_dir.join(rel))
     }
 
+    /// The input directory every data file is read beneath, or an error saying how to set one.
+    pub fn data_root(&self) -> Result<crate::input::InputRoot, String> {
+        self.data
+            .read()
+            .ok()
+            .and_then(|d| d.clone())
+            .ok_or_else(|| {
+                "no data directory: run the script from a file or pass --data DIR".into()
+            })
+    }
+
     /// Prints a script message to stderr, prefixed with the script name, without
     /// tearing an active progress display.
     pub fn print(&self, text: &str) {
@@ -258,6 +275,8 @@ pub struct Host {
     time_limit: Option<Duration>,
     max_memory: u64,
     sweep: crate::sweep::Role,
+    /// True when `--data` was given; otherwise each script file's directory is its data root.
+    data_fixed: bool,
 }
 
 /// The token of a shard run that has computed its share of a sweep: the script stops there,
@@ -311,10 +330,17 @@ impl Host {
 
         let root = crate::io::OutputRoot::open(&options.out_dir)
             .map_err(|e| ScriptError::new(options.out_dir.display().to_string(), e.to_string()))?;
+        let data = options
+            .data_dir
+            .as_deref()
+            .map(crate::input::InputRoot::open)
+            .transpose()
+            .map_err(|e| ScriptError::new("--data", e.to_string()))?;
         crate::solve::show_progress(!options.quiet);
         let context = Arc::new(HostContext {
             out_dir: options.out_dir,
             root: Some(root),
+            data: RwLock::new(data),
             params: options.params,
             quiet: options.quiet,
             script: RwLock::new(String::new()),
@@ -327,6 +353,7 @@ impl Host {
             time_limit: options.time_limit,
             max_memory: options.max_memory,
             sweep: options.sweep,
+            data_fixed: options.data_dir.is_some(),
         })
     }
 
@@ -347,9 +374,21 @@ impl Host {
         self.compile(&name, &text).map(|_| ())
     }
 
-    /// Compiles and runs the script at `path`.
+    /// Compiles and runs the script at `path`. Without `--data`, data files are read beneath
+    /// the script's own directory, opened now.
     pub fn run_file(&self, path: &Path) -> Result<(), ScriptError> {
         let (name, text) = read_script(path)?;
+        if !self.data_fixed {
+            let dir = match path.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d,
+                _ => Path::new("."),
+            };
+            let root = crate::input::InputRoot::open(dir)
+                .map_err(|e| ScriptError::new(&name, e.to_string()))?;
+            if let Ok(mut d) = self.context.data.write() {
+                *d = Some(root);
+            }
+        }
         self.run_str(&name, &text)
     }
 
@@ -544,6 +583,7 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
     });
     accuracy::register_types(&mut engine);
     signal::register_types(&mut engine);
+    laminate::register_types(&mut engine);
     scene::register_types(&mut engine);
     trnews::register_types(&mut engine);
     study::register_types(&mut engine);
@@ -683,6 +723,7 @@ fn script_type(rust: &str) -> String {
         "SceneRef" => "Scene",
         "RunRef" => "Run",
         "TrNewsRef" => "TrNews",
+        "LaminateRef" => "Laminate",
         other => other,
     }
     .to_string()
@@ -706,6 +747,7 @@ mod tests {
         HostContext {
             out_dir: dir.to_path_buf(),
             root: None,
+            data: RwLock::new(None),
             params: BTreeMap::new(),
             quiet: true,
             script: RwLock::new(String::new()),

@@ -451,7 +451,7 @@ mod signal_api {
         sig::periodogram(s, window_named(&ctx, window)?).at(&ctx)
     }
 
-    /// Welch average of windowed periodograms of segment_len samples overlapping by overlap_fraction.
+    /// Welch average of windowed periodograms of segment_len samples overlapping by overlap_fraction, segments used as they are (no detrend).
     #[rhai_fn(global, pure, return_raw)]
     pub fn welch(
         ctx: NativeCallContext,
@@ -460,9 +460,32 @@ mod signal_api {
         overlap_fraction: FLOAT,
         window: &str,
     ) -> Res<Spectrum> {
+        welch_detrended(ctx, s, segment_len, overlap_fraction, window, "none")
+    }
+
+    /// welch with a detrend: "constant" subtracts each segment's mean before the window (scipy.signal.welch's default), "none" keeps it.
+    #[rhai_fn(global, name = "welch", pure, return_raw)]
+    pub fn welch_detrended(
+        ctx: NativeCallContext,
+        s: &mut Signal,
+        segment_len: INT,
+        overlap_fraction: FLOAT,
+        window: &str,
+        detrend: &str,
+    ) -> Res<Spectrum> {
         let n = usize::try_from(segment_len)
             .map_err(|_| error(&ctx, format!("segment_len = {segment_len} must be >= 2")))?;
-        sig::welch(s, n, overlap_fraction, window_named(&ctx, window)?).at(&ctx)
+        let detrend = match detrend {
+            "none" => sig::Detrend::None,
+            "constant" => sig::Detrend::Constant,
+            other => {
+                return Err(error(
+                    &ctx,
+                    format!("detrend = \"{other}\": expected \"none\" or \"constant\""),
+                ))
+            }
+        };
+        sig::welch(s, n, overlap_fraction, window_named(&ctx, window)?, detrend).at(&ctx)
     }
 
     /// Frequencies f_k = k df (Hz), copied into an array.

@@ -90,6 +90,98 @@ fn companions_wanted(
     }
 }
 
+/// Options of `trnews::channel_from_impulse` and `trnews::channel_from_recordings`.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ChannelOptions {
+    /// Peak of the drive signals: the chirp's amplitude and the focusing signals' peak (in
+    /// the drive's unit, e.g. Pa or V).
+    pub peak_drive: f64,
+    /// The band the traces were recorded in, for titles and printed results.
+    pub band: String,
+}
+
+impl Default for ChannelOptions {
+    fn default() -> Self {
+        ChannelOptions {
+            peak_drive: 1.0,
+            band: "band as recorded".into(),
+        }
+    }
+}
+
+/// Signals from an array, naming `what[i]` when an element is not a Signal.
+fn signal_list(
+    ctx: &NativeCallContext,
+    list: &Array,
+    what: &str,
+) -> ScriptResult<Vec<crate::signal::Signal>> {
+    list.iter()
+        .enumerate()
+        .map(|(i, t)| {
+            t.read_lock::<crate::signal::Signal>()
+                .map(|s| s.clone())
+                .ok_or_else(|| {
+                    error(
+                        ctx,
+                        format!("{what}[{i}] must be a Signal, got {}", t.type_name()),
+                    )
+                })
+        })
+        .collect()
+}
+
+/// Recordings from an array of maps #{sent: Signal, received: [Signal]} (no other fields).
+fn recordings(
+    ctx: &NativeCallContext,
+    list: &Array,
+) -> ScriptResult<Vec<crate::trnews::Recording>> {
+    list.iter()
+        .enumerate()
+        .map(|(i, item)| {
+            let map = item.read_lock::<Map>().ok_or_else(|| {
+                error(
+                    ctx,
+                    format!(
+                        "recordings[{i}] must be a map #{{sent, received}}, got {}",
+                        item.type_name()
+                    ),
+                )
+            })?;
+            if let Some(k) = map
+                .keys()
+                .find(|k| !["sent", "received"].contains(&k.as_str()))
+            {
+                return Err(error(
+                    ctx,
+                    format!("recordings[{i}].{k}: unknown field (expected sent, received)"),
+                ));
+            }
+            let field = |name: &str| {
+                map.get(name)
+                    .ok_or_else(|| error(ctx, format!("recordings[{i}] has no field '{name}'")))
+            };
+            let sent = field("sent")?
+                .read_lock::<crate::signal::Signal>()
+                .map(|s| s.clone())
+                .ok_or_else(|| error(ctx, format!("recordings[{i}].sent must be a Signal")))?;
+            let received = field("received")?
+                .read_lock::<Array>()
+                .map(|a| a.clone())
+                .ok_or_else(|| {
+                    error(
+                        ctx,
+                        format!("recordings[{i}].received must be an array of Signals"),
+                    )
+                })?;
+            Ok(crate::trnews::Recording {
+                sent,
+                received: signal_list(ctx, &received, &format!("recordings[{i}].received"))?,
+            })
+        })
+        .collect()
+}
+
 /// A map of named estimates as Rhai values.
 fn estimate_map(entries: Vec<(&str, Estimate)>) -> Dynamic {
     entries
@@ -132,11 +224,12 @@ fn delayed_sweep(
         .map(|f| (&f.source, &f.focused))
         .collect();
     let first_pass = Key::of("delayed_first_pass", &(&tr.spec, &focusing)).at(ctx)?;
+    let identity = r.identity().at(ctx)?;
     let specs = points
         .iter()
         .map(|(delays, amplitudes)| {
             let inputs = (
-                r.identity(),
+                &identity,
                 first_pass.as_str(),
                 focus.receiver,
                 half_window_s,
@@ -147,15 +240,15 @@ fn delayed_sweep(
             Ok(PointSpec {
                 key: Key::of("delayed", &inputs)?,
                 label: format!("tau = {delays:?} s, a = {amplitudes:?}"),
-                sharded: !r.convolves(),
+                sharded: r.simulates(),
             })
         })
         .collect::<crate::Result<Vec<_>>>()
         .at(ctx)?;
-    let how = if r.convolves() {
-        "convolved"
-    } else {
+    let how = if r.simulates() {
         "simulated"
+    } else {
+        "convolved or recorded"
     };
     let name = format!("delayed TR-NEWS at receiver {} ({how})", focus.receiver);
     let sweep = Sweep::start(&name, "delayed", specs);
@@ -307,6 +400,60 @@ mod trnews_api {
     #[rhai_fn(return_raw)]
     pub fn responder(ctx: NativeCallContext, scene: SceneRef, duration_s: FLOAT) -> Res<Responder> {
         Responder::new(scene, duration_s).at(&ctx)
+    }
+
+    /// A measured channel from one impulse response per receiver (Signals on one step: each receiver's response to a unit drive sample at t = 0, transducers included), with options #{peak_drive, band}: every transmission is the discrete convolution y_r[n] = sum_k s[k] h_r[n - k], and tr_news, delayed and pulse_inversion run on it as on a scene.
+    #[rhai_fn(return_raw)]
+    pub fn channel_from_impulse(
+        ctx: NativeCallContext,
+        impulse: Array,
+        settings: Map,
+    ) -> Res<Responder> {
+        let o: super::ChannelOptions =
+            options(&ctx, settings, &super::ChannelOptions::default(), "channel")?;
+        let traces = super::signal_list(&ctx, &impulse, "impulse")?;
+        Responder::from_impulse(traces, o.peak_drive, o.band).at(&ctx)
+    }
+
+    /// A channel of recorded responses from an array of #{sent: Signal, received: [Signal per receiver]}, with options #{peak_drive, band}: a transmission is answered by the recording of the same drive (relative L2 difference <= 1e-9) and refused, naming it, when it was not recorded.
+    #[rhai_fn(return_raw)]
+    pub fn channel_from_recordings(
+        ctx: NativeCallContext,
+        list: Array,
+        settings: Map,
+    ) -> Res<Responder> {
+        let o: super::ChannelOptions =
+            options(&ctx, settings, &super::ChannelOptions::default(), "channel")?;
+        let recordings = super::recordings(&ctx, &list)?;
+        if recordings.is_empty() {
+            return Err(super::error(
+                &ctx,
+                "recordings is empty: give at least one #{sent, received}",
+            ));
+        }
+        Responder::from_recordings(recordings, o.peak_drive, o.band).at(&ctx)
+    }
+
+    /// The channel's response to a unit drive sample at t = 0 over `duration_s`, per receiver (array of Signal), through the transducers: what channel_from_impulse takes.
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn impulse_response(
+        ctx: NativeCallContext,
+        r: &mut Responder,
+        duration_s: FLOAT,
+    ) -> Res<Array> {
+        let unit = Signal::new(r.dt_s(), 0.0, vec![1.0]).at(&ctx)?;
+        Ok(r.respond(&unit, duration_s)
+            .at(&ctx)?
+            .traces
+            .into_iter()
+            .map(Dynamic::from)
+            .collect())
+    }
+
+    /// Peak of the drive signals: the scene transmitter's peak traction (Pa), or a channel's peak_drive.
+    #[rhai_fn(global, get = "peak_drive", pure)]
+    pub fn peak_drive(r: &mut Responder) -> FLOAT {
+        r.peak_drive()
     }
 
     /// A responder that simulates every transmission, even for a linear scene (for validation).

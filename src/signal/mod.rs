@@ -28,7 +28,7 @@ pub use filter::{butterworth, filtfilt, sosfilt, Biquad, FilterKind, Sos};
 pub use hilbert::{analytic, envelope, instantaneous_frequency};
 pub use measure::{peak, relative_l2, side_lobes, Peak, SideLobes};
 pub use resample::resample;
-pub use spectrum::{periodogram, welch, Spectrum, Window};
+pub use spectrum::{periodogram, welch, Detrend, Spectrum, Window};
 
 /// Relative tolerance on equality of two sample intervals.
 pub const DT_REL_TOL: f64 = 1e-9;

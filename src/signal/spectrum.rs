@@ -37,6 +37,15 @@ impl Window {
     }
 }
 
+/// What is removed from each Welch segment before it is windowed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Detrend {
+    /// Nothing: the segment's mean goes into the DC bin and the total power.
+    None,
+    /// The segment's mean (scipy.signal.welch's default, `detrend='constant'`).
+    Constant,
+}
+
 /// One-sided power spectral density on `f_k = k df`, `k = 0..=n/2`, in
 /// (signal unit)^2 / Hz, normalised so that `sum_k psd_k df` is the mean power
 /// `mean(x^2)` (exactly for a rectangular periodogram, on average otherwise).
@@ -112,13 +121,15 @@ pub fn periodogram(s: &Signal, window: Window) -> Result<Spectrum, SignalError> 
 
 /// Welch's method: the average of windowed periodograms of segments of
 /// `segment_len` samples overlapping by `round(overlap_fraction * segment_len)`;
-/// trailing samples that do not fill a segment are ignored. Same units and
-/// normalisation as [`periodogram`], `df = 1 / (segment_len dt)`.
+/// trailing samples that do not fill a segment are ignored. With [`Detrend::Constant`] each
+/// segment's mean is subtracted before the window, as scipy.signal.welch does by default.
+/// Same units and normalisation as [`periodogram`], `df = 1 / (segment_len dt)`.
 pub fn welch(
     s: &Signal,
     segment_len: usize,
     overlap_fraction: f64,
     window: Window,
+    detrend: Detrend,
 ) -> Result<Spectrum, SignalError> {
     s.validate()?;
     if !(2..=s.len()).contains(&segment_len) {
@@ -141,8 +152,15 @@ pub fn welch(
     let fft: Arc<dyn Fft<f64>> = FftPlanner::new().plan_fft_forward(segment_len);
     let starts: Vec<usize> = (0..=s.len() - segment_len).step_by(step).collect();
     let mut psd = vec![0.0; segment_len / 2 + 1];
+    let mut centred = Vec::new();
     for &start in &starts {
-        let seg = &s.samples[start..start + segment_len];
+        let mut seg = &s.samples[start..start + segment_len];
+        if detrend == Detrend::Constant {
+            let mean = seg.iter().sum::<f64>() / segment_len as f64;
+            centred.clear();
+            centred.extend(seg.iter().map(|x| x - mean));
+            seg = &centred;
+        }
         for (acc, p) in psd
             .iter_mut()
             .zip(segment_psd(seg, &w, s.dt_s, fft.as_ref()))
@@ -202,7 +220,7 @@ mod tests {
             Window::Blackman,
             Window::Rectangular,
         ] {
-            let sp = welch(&s, 4096, 0.5, window).expect("valid");
+            let sp = welch(&s, 4096, 0.5, window, Detrend::None).expect("valid");
             let p = sp.total_power();
             assert!((p / (a * a / 2.0) - 1.0).abs() < 0.01, "{window:?}: {p}");
             let top = sp.peaks(1, 0.0).expect("valid")[0];
@@ -248,10 +266,52 @@ mod tests {
     }
 
     #[test]
+    fn welch_with_constant_detrend_matches_scipy() {
+        // Reference computed once with scipy 1.17.1:
+        //   k = np.arange(64); x = 0.3 + np.sin(2*np.pi*0.05*k) + 0.5*np.cos(2*np.pi*0.173*k)
+        //   f, p = scipy.signal.welch(x, fs=1e8, window='hann', nperseg=16, noverlap=8)
+        // (detrend='constant' and scaling='density' are scipy's defaults). Same
+        // arithmetic up to the FFT's summation order: 1e-10 relative to the largest bin
+        // (round-off is ~1e-15); without the detrend bin 0 is 3.15e-8, not 8.34e-9.
+        let scipy = [
+            8.34059904538903e-09,
+            3.861533927335734e-08,
+            1.766369986667551e-08,
+            1.1989999608659066e-08,
+            1.522570626198992e-09,
+            9.374874684806382e-12,
+            9.00442879921779e-13,
+            1.57750610274988e-13,
+            2.7676711180729984e-14,
+        ];
+        let x = (0..64)
+            .map(|k| {
+                let k = k as f64;
+                0.3 + (2.0 * PI * 0.05 * k).sin() + 0.5 * (2.0 * PI * 0.173 * k).cos()
+            })
+            .collect();
+        let s = Signal::new(1e-8, 0.0, x).expect("finite");
+        let sp = welch(&s, 16, 0.5, Window::Hann, Detrend::Constant).expect("valid");
+        assert_eq!(sp.psd.len(), scipy.len());
+        assert!((sp.df_hz - 6.25e6).abs() < 1e-6);
+        for (k, (p, r)) in sp.psd.iter().zip(scipy).enumerate() {
+            assert!(
+                (p - r).abs() < 1e-10 * scipy[1],
+                "bin {k}: {p} vs scipy {r}"
+            );
+        }
+        let raw = welch(&s, 16, 0.5, Window::Hann, Detrend::None).expect("valid");
+        // scipy detrend=False gives bin 0 = 3.1522637085575915e-08
+        assert!((raw.psd[0] / 3.1522637085575915e-08 - 1.0).abs() < 1e-10);
+    }
+
+    #[test]
     fn welch_rejects_bad_segments() {
         let s = Signal::new(1e-9, 0.0, vec![0.0; 100]).expect("finite");
-        let e = welch(&s, 200, 0.5, Window::Hann).unwrap_err().to_string();
+        let e = welch(&s, 200, 0.5, Window::Hann, Detrend::None)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("segment_len") && e.contains("200"), "{e}");
-        assert!(welch(&s, 50, 1.0, Window::Hann).is_err());
+        assert!(welch(&s, 50, 1.0, Window::Hann, Detrend::None).is_err());
     }
 }

@@ -1,0 +1,440 @@
+//! Data-file inputs: NPY, CSV and JSON, read beneath an input directory opened once.
+//!
+//! An [`InputRoot`] is the read-side twin of [`crate::io::OutputRoot`]: the directory is opened
+//! once with cap-std, and every file is opened relative to that handle with openat-style
+//! lookups, so a symlink leading out of it (even one swapped while a script runs) is refused
+//! at the moment of use. Files are bounded: one larger than the caller's limit is refused
+//! before it is read, naming its size. The parsers refuse malformed files with the file, the
+//! place (row, column, header field) and what was found; non-finite numbers are refused too.
+
+use std::io::Read as _;
+use std::path::{Component, Path, PathBuf};
+use std::sync::Arc;
+
+/// Failure to read a data file; every variant names the path.
+#[derive(Debug, thiserror::Error)]
+pub enum InputError {
+    /// An operating-system call failed (`op` says which).
+    #[error("cannot {op} {path}: {source}", path = .path.display())]
+    Io {
+        /// What was being done.
+        op: &'static str,
+        /// The file or directory concerned.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// The path is absolute, has `..`, or leads out of the input directory through a symlink.
+    #[error("data path '{path}' leads outside the data directory {root} ({why}); refused", root = .root.display())]
+    Outside {
+        /// The path as given.
+        path: String,
+        /// The input root.
+        root: PathBuf,
+        /// Why: absolute, `..`, or a symlink.
+        why: &'static str,
+    },
+    /// The file is larger than the read limit.
+    #[error("data file {path} is {size}, above the read limit {limit} ({why})", path = .path.display())]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size, formatted.
+        size: String,
+        /// The limit, formatted.
+        limit: String,
+        /// Where the limit comes from.
+        why: String,
+    },
+    /// The contents are not a valid file of the expected format.
+    #[error("cannot read {path}: {message}", path = .path.display())]
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, and where.
+        message: String,
+    },
+}
+
+impl InputError {
+    fn format(path: &Path, message: impl Into<String>) -> Self {
+        InputError::Format {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+}
+
+/// An input directory opened once; every read is resolved beneath it.
+#[derive(Clone, Debug)]
+pub struct InputRoot {
+    dir: Arc<cap_std::fs::Dir>,
+    path: PathBuf,
+}
+
+impl InputRoot {
+    /// Opens the existing directory `path` as the root of every read made through it.
+    pub fn open(path: &Path) -> Result<InputRoot, InputError> {
+        let dir = cap_std::fs::Dir::open_ambient_dir(path, cap_std::ambient_authority()).map_err(
+            |source| InputError::Io {
+                op: "open data directory",
+                path: path.to_path_buf(),
+                source,
+            },
+        )?;
+        Ok(InputRoot {
+            dir: Arc::new(dir),
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// The directory as given when opened.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The bytes of the file at `rel` (relative, without `..`), opened beneath the root;
+    /// refused above `limit_bytes` before reading, the message saying `why` that limit.
+    pub fn read(&self, rel: &str, limit_bytes: u64, why: &str) -> Result<Vec<u8>, InputError> {
+        let outside = |why| InputError::Outside {
+            path: rel.to_string(),
+            root: self.path.clone(),
+            why,
+        };
+        let p = Path::new(rel);
+        if rel.is_empty() || p.has_root() || p.is_absolute() {
+            return Err(outside("give a path relative to the data directory"));
+        }
+        if p.components()
+            .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
+        {
+            return Err(outside("'..' is not allowed"));
+        }
+        let full = self.path.join(p);
+        let file = self.dir.open(p).map_err(|source| {
+            if source.to_string().contains("outside of the filesystem") || self.leads_outside(p) {
+                outside("through a symlink")
+            } else {
+                InputError::Io {
+                    op: "open",
+                    path: full.clone(),
+                    source,
+                }
+            }
+        })?;
+        let io = |op, source| InputError::Io {
+            op,
+            path: full.clone(),
+            source,
+        };
+        let meta = file.metadata().map_err(|e| io("inspect", e))?;
+        if !meta.is_file() {
+            return Err(InputError::format(&full, "not a regular file"));
+        }
+        let too_large = |size: u64| InputError::TooLarge {
+            path: full.clone(),
+            size: crate::budget::format_bytes(size as f64),
+            limit: crate::budget::format_bytes(limit_bytes as f64),
+            why: why.to_string(),
+        };
+        if meta.len() > limit_bytes {
+            return Err(too_large(meta.len()));
+        }
+        // Read at most one byte past the limit: a file that grew since it was measured is
+        // refused too, never read without bound.
+        let mut bytes = Vec::with_capacity(meta.len() as usize);
+        file.take(limit_bytes.saturating_add(1))
+            .read_to_end(&mut bytes)
+            .map_err(|e| io("read", e))?;
+        if bytes.len() as u64 > limit_bytes {
+            return Err(too_large(bytes.len() as u64));
+        }
+        Ok(bytes)
+    }
+
+    /// True when the longest existing prefix of `rel` resolves outside the root (wording only:
+    /// cap-std has already refused the open).
+    fn leads_outside(&self, rel: &Path) -> bool {
+        let Ok(root) = std::fs::canonicalize(&self.path) else {
+            return false;
+        };
+        rel.ancestors()
+            .filter(|a| !a.as_os_str().is_empty())
+            .find_map(|a| std::fs::canonicalize(self.path.join(a)).ok())
+            .is_some_and(|real| !real.starts_with(&root))
+    }
+}
+
+/// A numeric array read from a file: values in row-major (C) order and the shape.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    /// Values, row-major.
+    pub values: Vec<f64>,
+    /// The shape: `[n]` or `[rows, columns]`.
+    pub shape: Vec<usize>,
+}
+
+/// Parses an `.npy` file of 1 or 2 dimensions with float64, float32, int64 or int32 values
+/// (either byte order, C or Fortran order); `path` names it in errors.
+pub fn parse_npy(path: &Path, bytes: &[u8]) -> Result<Table, InputError> {
+    let bad = |m: String| InputError::format(path, m);
+    let mut data = bytes;
+    let header = npyz::NpyHeader::from_reader(&mut data)
+        .map_err(|e| bad(format!("not an .npy file: {e}")))?;
+    let file = npyz::NpyFile::with_header(header, data);
+    let shape: Vec<usize> = file
+        .shape()
+        .iter()
+        .map(|&d| usize::try_from(d).map_err(|_| bad(format!("dimension {d} too large"))))
+        .collect::<Result<_, _>>()?;
+    if !(1..=2).contains(&shape.len()) {
+        return Err(bad(format!(
+            "shape {shape:?}: only 1-D and 2-D arrays are read"
+        )));
+    }
+    let dtype = match file.dtype() {
+        npyz::DType::Plain(t) => t.to_string(),
+        other => other.descr(),
+    };
+    type Convert = fn(npyz::NpyFile<&[u8]>) -> std::io::Result<Vec<f64>>;
+    let (width, convert): (usize, Convert) = match dtype.trim_start_matches(['<', '>', '|', '=']) {
+        "f8" => (8, |f| f.into_vec::<f64>()),
+        "f4" => (4, |f| {
+            Ok(f.into_vec::<f32>()?.into_iter().map(f64::from).collect())
+        }),
+        "i8" => (8, |f| {
+            Ok(f.into_vec::<i64>()?.into_iter().map(|v| v as f64).collect())
+        }),
+        "i4" => (4, |f| {
+            Ok(f.into_vec::<i32>()?.into_iter().map(f64::from).collect())
+        }),
+        _ => {
+            return Err(bad(format!(
+                "dtype {dtype}: expected float64, float32, int64 or int32"
+            )))
+        }
+    };
+    // The header's shape must match the bytes that follow it: a forged header cannot make
+    // the reader promise more values than the file holds.
+    let count = shape.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
+    if count.and_then(|n| n.checked_mul(width)) != Some(data.len()) {
+        return Err(bad(format!(
+            "shape {shape:?} of {dtype} does not match the {} data bytes after the header",
+            data.len()
+        )));
+    }
+    let fortran = file.order() == npyz::Order::Fortran;
+    let mut values = convert(file).map_err(|e| bad(format!("data: {e}")))?;
+    if fortran && shape.len() == 2 {
+        let (rows, cols) = (shape[0], shape[1]);
+        values = (0..rows * cols)
+            .map(|k| values[(k % cols) * rows + k / cols])
+            .collect();
+    }
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(bad(format!("element {i} is {}: not finite", values[i])));
+    }
+    Ok(Table { values, shape })
+}
+
+/// Named numeric columns of a CSV file, in the file's order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Columns {
+    /// Header names.
+    pub headers: Vec<String>,
+    /// One column of values per header.
+    pub columns: Vec<Vec<f64>>,
+}
+
+/// Parses a CSV file with a header row and numeric cells (the `csv` crate: RFC 4180 quoting,
+/// every row as long as the header). Errors name the line, the column's header and the text.
+pub fn parse_csv(path: &Path, bytes: &[u8]) -> Result<Columns, InputError> {
+    let bad = |m: String| InputError::format(path, m);
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(bytes);
+    let headers: Vec<String> = reader
+        .headers()
+        .map_err(|e| bad(format!("header row: {e}")))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    if headers.is_empty() || headers.iter().all(String::is_empty) {
+        return Err(bad(
+            "no header row (the first line names the columns)".into()
+        ));
+    }
+    if let Some(i) = headers.iter().position(String::is_empty) {
+        return Err(bad(format!("column {} has an empty header", i + 1)));
+    }
+    if let Some((i, h)) = headers
+        .iter()
+        .enumerate()
+        .find(|(i, h)| headers[..*i].contains(h))
+    {
+        return Err(bad(format!(
+            "header '{h}' appears twice (column {})",
+            i + 1
+        )));
+    }
+    let mut columns = vec![Vec::new(); headers.len()];
+    for record in reader.records() {
+        let record = record.map_err(|e| bad(e.to_string()))?;
+        let line = record.position().map_or(0, |p| p.line());
+        for ((cell, column), header) in record.iter().zip(&mut columns).zip(&headers) {
+            let v: f64 = cell.parse().map_err(|_| {
+                bad(format!(
+                    "line {line}, column '{header}': '{cell}' is not a number"
+                ))
+            })?;
+            if !v.is_finite() {
+                return Err(bad(format!(
+                    "line {line}, column '{header}': '{cell}' is not finite"
+                )));
+            }
+            column.push(v);
+        }
+    }
+    Ok(Columns { headers, columns })
+}
+
+/// Parses a JSON document; errors give the line and column.
+pub fn parse_json(path: &Path, bytes: &[u8]) -> Result<serde_json::Value, InputError> {
+    serde_json::from_slice(bytes).map_err(|e| InputError::format(path, format!("JSON: {e}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p() -> &'static Path {
+        Path::new("x")
+    }
+
+    #[test]
+    fn npy_round_trips_the_writer_and_reads_other_dtypes_and_fortran_order() {
+        let dir = std::env::temp_dir().join(format!("trnews-input-npy-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let file = dir.join("a.npy");
+        crate::io::write_npy(&file, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.5], &[2, 3]).expect("write");
+        let bytes = std::fs::read(&file).expect("read");
+        let t = parse_npy(&file, &bytes).expect("parse");
+        assert_eq!(t.shape, vec![2, 3]);
+        assert_eq!(t.values, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.5]);
+        // numpy: np.array([[1, 2, 3], [4, 5, 6]], dtype='<i4', order='F') saved with np.save
+        use npyz::WriterBuilder;
+        let mut f = Vec::new();
+        let mut w = npyz::WriteOptions::<i32>::new()
+            .default_dtype()
+            .shape(&[2, 3])
+            .order(npyz::Order::Fortran)
+            .writer(&mut f)
+            .begin_nd()
+            .expect("writer");
+        w.extend([1, 4, 2, 5, 3, 6]).expect("data");
+        w.finish().expect("finish");
+        let t = parse_npy(p(), &f).expect("parse i4 Fortran");
+        assert_eq!(t.values, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn malformed_npy_is_an_error_naming_the_cause() {
+        let e = parse_npy(p(), b"not numpy").unwrap_err().to_string();
+        assert!(e.contains("not an .npy file"), "{e}");
+        let mut good = Vec::new();
+        {
+            use npyz::WriterBuilder;
+            let mut w = npyz::WriteOptions::<f64>::new()
+                .default_dtype()
+                .shape(&[4])
+                .writer(&mut good)
+                .begin_nd()
+                .expect("writer");
+            w.extend([1.0, 2.0, f64::NAN, 4.0]).expect("data");
+            w.finish().expect("finish");
+        }
+        let e = parse_npy(p(), &good).unwrap_err().to_string();
+        assert!(e.contains("element 2") && e.contains("not finite"), "{e}");
+        let truncated = &good[..good.len() - 9];
+        let e = parse_npy(p(), truncated).unwrap_err().to_string();
+        assert!(e.contains("does not match"), "{e}");
+        // a forged header claiming 1e15 values is refused before reading
+        let header_end = good.len() - 32;
+        let text =
+            String::from_utf8_lossy(&good[..header_end]).replace("(4,)", "(999999999999999,)");
+        let mut forged = text.into_bytes();
+        forged.extend_from_slice(&good[header_end..]);
+        assert!(parse_npy(p(), &forged).is_err());
+    }
+
+    #[test]
+    fn csv_reads_columns_and_names_bad_cells() {
+        let c = parse_csv(p(), b"t_s, a,\"b\"\n0,1,2\n1e-8,3.5,-4\n").expect("parse");
+        assert_eq!(c.headers, vec!["t_s", "a", "b"]);
+        assert_eq!(c.columns[1], vec![1.0, 3.5]);
+        let e = parse_csv(p(), b"t,a\n0,1\n1,x\n").unwrap_err().to_string();
+        assert!(
+            e.contains("line 3") && e.contains("'a'") && e.contains("'x'"),
+            "{e}"
+        );
+        let e = parse_csv(p(), b"t,a\n0,1\n1\n").unwrap_err().to_string();
+        assert!(e.contains("record") || e.contains("fields"), "{e}");
+        let e = parse_csv(p(), b"t,a\n0,nan\n").unwrap_err().to_string();
+        assert!(e.contains("not finite"), "{e}");
+        let e = parse_csv(p(), b"t,t\n0,1\n").unwrap_err().to_string();
+        assert!(e.contains("twice"), "{e}");
+        assert!(parse_csv(p(), b"").is_err());
+        assert!(parse_csv(p(), b"\xff\xfe,\n").is_err());
+    }
+
+    #[test]
+    fn mutated_files_never_panic() {
+        // Seeded byte flips, truncations and insertions of valid files: every parser returns
+        // Ok or an error, never a panic (a panic fails the test).
+        let mut npy = Vec::new();
+        {
+            use npyz::WriterBuilder;
+            let mut w = npyz::WriteOptions::<f64>::new()
+                .default_dtype()
+                .shape(&[3, 2])
+                .writer(&mut npy)
+                .begin_nd()
+                .expect("writer");
+            w.extend([1.0, 2.0, 3.0, 4.0, 5.0, 6.0]).expect("data");
+            w.finish().expect("finish");
+        }
+        let csv = b"t_s,a,\"b c\"\n0,1.5,2\n1e-8,-3,4e2\n".to_vec();
+        let json = br#"{"a": [1, 2.5, {"b": null}], "c": "x"}"#.to_vec();
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for case in 0..3000 {
+            let base = [&npy, &csv, &json][case % 3];
+            let mut bytes = base.clone();
+            for _ in 0..1 + next() % 4 {
+                let i = (next() % bytes.len().max(1) as u64) as usize;
+                match next() % 3 {
+                    0 if !bytes.is_empty() => bytes[i] = next() as u8,
+                    1 => bytes.truncate(i),
+                    _ => bytes.insert(i.min(bytes.len()), next() as u8),
+                }
+            }
+            let _ = parse_npy(p(), &bytes);
+            let _ = parse_csv(p(), &bytes);
+            let _ = parse_json(p(), &bytes);
+        }
+    }
+
+    #[test]
+    fn json_errors_give_the_position() {
+        let e = parse_json(p(), b"{\"a\": [1, 2,]}")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 1"), "{e}");
+    }
+}
