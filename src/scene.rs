@@ -11,8 +11,8 @@ use crate::material::{Orthotropic, Plane};
 use crate::mesh::{Mesh, Side};
 use crate::signal::Signal;
 use crate::solve::{
-    self, point_receiver, segment_receiver, segment_shares, traction_source, Integrator, Quantity, Receiver, RunConfig, RunOutput,
-    StabilityEstimate,
+    self, point_receiver, segment_receiver, segment_shares, traction_source, Integrator, Quantity,
+    Receiver, RunConfig, RunOutput, StabilityEstimate,
 };
 use crate::transducer::TransducerSpec;
 use serde::{Deserialize, Serialize};
@@ -28,6 +28,46 @@ pub enum LaminateSpec {
         /// Layers, top first.
         layers: Vec<LayerSpec>,
     },
+    /// A homogeneous block: one layer.
+    Homogeneous {
+        /// Its material.
+        material: MaterialSpec,
+        /// Thickness (m).
+        thickness_m: f64,
+    },
+}
+
+/// A scene meshed by Gmsh: the T3 elements of an MSH 4.1 file (see
+/// [`crate::mesh::gmsh::read_msh`]), materials by physical surface group, and optionally a
+/// crack drawn as a physical line. The region's edges are the sides of the mesh's bounding
+/// box (sources, receivers and edge conditions refer to them); `laminate`, `width_m` and
+/// the element sizes are not used.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GmshSpec {
+    /// The .msh file. Scripts give it relative to their input directory (the script's
+    /// directory), see [`crate::script::HostContext::read_input`].
+    pub path: String,
+    /// The material of each physical surface group, keyed by the group's tag (`"1"`).
+    pub materials: std::collections::BTreeMap<String, MaterialSpec>,
+    /// Tag of the physical line that is the crack: a horizontal straight line of element
+    /// edges strictly inside the mesh (contact acts on u_y, report Sec. 4.9).
+    #[serde(default)]
+    pub crack_line: Option<i32>,
+    /// Contact on the crack faces; `None` leaves the crack open.
+    #[serde(default = "default_contact")]
+    pub contact: Option<ContactOptions>,
+    /// Faces tied (the uncracked companion, [`SceneSpec::uncracked`]).
+    #[serde(default)]
+    pub tied: bool,
+    /// The file's bytes when the caller has read it (scripts read it inside their sandbox);
+    /// `None` reads `path`.
+    #[serde(skip)]
+    pub bytes: Option<std::sync::Arc<Vec<u8>>>,
+}
+
+fn default_contact() -> Option<ContactOptions> {
+    Some(ContactOptions::default())
 }
 
 /// A material by preset name (`epoxy`, `fabric_0_90`, `fabric_45_45`) or by its constants.
@@ -343,6 +383,8 @@ pub struct SceneSpec {
     pub receivers: ReceiverSpec,
     /// The crack, if any.
     pub crack: Option<CrackSpec>,
+    /// A mesh from a Gmsh file instead of the layered rectangle (`None`: the laminate).
+    pub gmsh: Option<GmshSpec>,
 }
 
 impl Default for SceneSpec {
@@ -364,6 +406,7 @@ impl Default for SceneSpec {
             sources: vec![],
             receivers: ReceiverSpec::default(),
             crack: Some(CrackSpec::default()),
+            gmsh: None,
         }
     }
 }
@@ -445,6 +488,10 @@ impl SceneSpec {
                 tied: true,
                 ..c.clone()
             }),
+            gmsh: self.gmsh.as_ref().map(|g| GmshSpec {
+                tied: true,
+                ..g.clone()
+            }),
             ..self.clone()
         }
     }
@@ -497,7 +544,131 @@ fn build_laminate(spec: &LaminateSpec, plane: Plane) -> Result<Laminate> {
                 .collect::<Result<Vec<_>>>()?;
             Laminate::from_layers(materials, stack)
         }
+        LaminateSpec::Homogeneous {
+            material,
+            thickness_m,
+        } => Laminate::homogeneous(material.constants()?.reduce(plane)?, *thickness_m),
     }
+}
+
+/// The layered rectangle: laminate, its mesh, the crack placed on the mesh lines, and the
+/// x of the right edge and y of the top edge.
+fn layered_mesh(spec: &SceneSpec) -> Result<(Laminate, Mesh, Option<CrackPlacement>, f64, f64)> {
+    require_positive("width_m", spec.width_m)?;
+    let laminate = build_laminate(&spec.laminate, spec.plane)?;
+    let height = laminate.thickness_m();
+    check_mesh_size(spec, &laminate)?;
+    let mesh = Mesh::layered(
+        &laminate,
+        spec.width_m,
+        spec.element_size_x_m,
+        spec.element_size_y_m,
+        &[],
+        &[],
+    )?;
+    let crack_placement = spec
+        .crack
+        .as_ref()
+        .map(|c| place_crack(spec, c, &mesh, height))
+        .transpose()?;
+    Ok((laminate, mesh, crack_placement, spec.width_m, height))
+}
+
+/// The Gmsh scene: its materials (as a laminate without layers), mesh, crack line, and the
+/// x of the right edge and y of the top edge of the bounding box.
+fn gmsh_mesh(
+    spec: &SceneSpec,
+    g: &GmshSpec,
+) -> Result<(Laminate, Mesh, Option<CrackPlacement>, f64, f64)> {
+    if spec.crack.is_some() {
+        return Err(Error::invalid(
+            "crack",
+            "a rectangular crack",
+            "a Gmsh scene takes its crack from gmsh.crack_line: set crack: ()",
+        ));
+    }
+    let bytes =
+        match &g.bytes {
+            Some(b) => b.clone(),
+            None => std::sync::Arc::new(std::fs::read(&g.path).map_err(|e| {
+                Error::invalid("gmsh.path", &g.path, format!("cannot be read: {e}"))
+            })?),
+        };
+    let mut materials = Vec::with_capacity(g.materials.len());
+    let mut groups = std::collections::HashMap::new();
+    for (key, material) in &g.materials {
+        let tag: i32 = key.trim().parse().map_err(|_| {
+            Error::invalid(
+                "gmsh.materials",
+                format!("key \"{key}\""),
+                "keys are the tags of physical surface groups, e.g. \"1\"",
+            )
+        })?;
+        groups.insert(tag, materials.len());
+        materials.push(material.constants()?.reduce(spec.plane)?);
+    }
+    let mesh = crate::mesh::gmsh::read_msh(&bytes, &groups)
+        .map_err(|e| Error::invalid("gmsh.path", &g.path, e.to_string()))?;
+    let placement = g
+        .crack_line
+        .map(|group| gmsh_crack(&bytes, group, &mesh, g.tied))
+        .transpose()?;
+    let (_, x1, _, y1) = mesh.bounds();
+    let laminate = Laminate {
+        materials,
+        layers: vec![],
+        draws: vec![],
+    };
+    Ok((laminate, mesh, placement, x1, y1))
+}
+
+/// The crack of a Gmsh scene: the nodes of physical line `group`, which must be a
+/// horizontal straight line of mesh nodes (every node of the mesh on its segment belongs to
+/// it; that its consecutive nodes are element edges is checked when it is inserted).
+fn gmsh_crack(bytes: &[u8], group: i32, mesh: &Mesh, tied: bool) -> Result<CrackPlacement> {
+    let points = crate::mesh::gmsh::read_physical_line(bytes, group)
+        .map_err(|e| Error::invalid("gmsh.crack_line", group, e.to_string()))?;
+    let y = points[0][1];
+    let tol = mesh.tolerance();
+    if let Some(p) = points.iter().find(|p| (p[1] - y).abs() > tol) {
+        return Err(Error::invalid(
+            "gmsh.crack_line",
+            group,
+            format!(
+                "the crack must be a horizontal straight line (contact acts on u_y): it has \
+                 points at y = {y:e} and {:e} m",
+                p[1]
+            ),
+        ));
+    }
+    let x0 = points.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min);
+    let x1 = points
+        .iter()
+        .map(|p| p[0])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let on_segment = mesh.nodes_on_segment([x0, y], [x1, y]).len();
+    if on_segment != points.len() {
+        return Err(Error::invalid(
+            "gmsh.crack_line",
+            group,
+            format!(
+                "the line has {} nodes but the mesh has {on_segment} on its segment: the crack \
+                 must be one unbroken line of element edges",
+                points.len()
+            ),
+        ));
+    }
+    let top = mesh.bounds().3;
+    Ok(CrackPlacement {
+        depth_requested_m: top - y,
+        depth_used_m: top - y,
+        x0_requested_m: x0,
+        x0_used_m: x0,
+        x1_requested_m: x1,
+        x1_used_m: x1,
+        tied,
+        y_m: y,
+    })
 }
 
 impl Scene {
@@ -513,23 +684,10 @@ impl Scene {
     /// omega_max(tied) <= omega_max(split), and contact by exact multipliers only constrains
     /// the split model further (report Sec. 4.8.2, 4.9).
     pub fn build(spec: &SceneSpec) -> Result<Scene> {
-        require_positive("width_m", spec.width_m)?;
-        let laminate = build_laminate(&spec.laminate, spec.plane)?;
-        let height = laminate.thickness_m();
-        check_mesh_size(spec, &laminate)?;
-        let mut mesh = Mesh::layered(
-            &laminate,
-            spec.width_m,
-            spec.element_size_x_m,
-            spec.element_size_y_m,
-            &[],
-            &[],
-        )?;
-        let crack_placement = spec
-            .crack
-            .as_ref()
-            .map(|c| place_crack(spec, c, &mesh, height))
-            .transpose()?;
+        let (laminate, mut mesh, crack_placement, width, height) = match &spec.gmsh {
+            None => layered_mesh(spec)?,
+            Some(g) => gmsh_mesh(spec, g)?,
+        };
         let crack = match &crack_placement {
             Some(p) if !p.tied => Some(p.insert(&mut mesh)?),
             _ => None,
@@ -549,16 +707,19 @@ impl Scene {
             ));
         }
         let transmitter = if spec.sources.is_empty() {
-            transmitter_weights(&mesh, &spec.transmitter, height, spec.width_m)?
+            transmitter_weights(&mesh, &spec.transmitter, height, width)?
         } else {
             source_weights(&mesh, &spec.sources)?
         };
         let receivers = build_receivers(&mesh, &spec.receivers, height)?;
-        let contact = spec
-            .crack
-            .as_ref()
-            .filter(|c| !c.tied)
-            .and_then(|c| c.contact);
+        let contact = match &spec.gmsh {
+            None => spec
+                .crack
+                .as_ref()
+                .filter(|c| !c.tied)
+                .and_then(|c| c.contact),
+            Some(g) => g.crack_line.filter(|_| !g.tied).and(g.contact),
+        };
         let absorbing = absorbing_edges(spec, &conditions, &mesh)?;
         let mut model = Model::build(mesh, laminate.materials.clone(), &absorbing, fixed, crack)?;
         if is_periodic(&conditions) {
@@ -1281,9 +1442,10 @@ fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Rec
                     (true, Some(x), None) => {
                         ([x, if edge == Side::Top { y1 } else { y0 }], [1.0, 0.0])
                     }
-                    (false, None, Some(d)) => {
-                        ([if edge == Side::Right { x1 } else { x0 }, y1 - d], [0.0, 1.0])
-                    }
+                    (false, None, Some(d)) => (
+                        [if edge == Side::Right { x1 } else { x0 }, y1 - d],
+                        [0.0, 1.0],
+                    ),
                     _ => {
                         return Err(Error::invalid(
                             field,

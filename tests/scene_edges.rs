@@ -6,11 +6,11 @@
 use rustfft::num_complex::Complex64;
 use rustfft::FftPlanner;
 use trnews::material::{Material, Plane};
+use trnews::mesh::Side;
 use trnews::scene::{
     Absorber, EdgeCondition, EdgeConditions, LaminateSpec, LayerSpec, MaterialSpec, ReceiverAt,
     ReceiverSpec, Scene, SceneSpec, SourceSpec, TransmitOptions,
 };
-use trnews::mesh::Side;
 use trnews::signal::Signal;
 
 /// The stack, top first: 0.6 mm 0/90 fabric, 0.3 mm epoxy, 0.6 mm fabric (1.5 mm).
@@ -150,10 +150,17 @@ fn exact(dt: f64, steps: usize, ys: &[f64]) -> Vec<Vec<f64>> {
     // U at each y (per unit bottom displacement) and S at the top, per frequency
     let mut responses: Vec<Vec<Complex64>> = vec![vec![Complex64::new(0.0, 0.0); n]; ys.len()];
     for k in 1..n {
-        let signed = if k <= n / 2 { k as f64 } else { k as f64 - n as f64 };
+        let signed = if k <= n / 2 {
+            k as f64
+        } else {
+            k as f64 - n as f64
+        };
         let omega = 2.0 * std::f64::consts::PI * signed / (n as f64 * dt);
         let at_y = |y: f64| {
-            let mut state = (Complex64::new(1.0, 0.0), Complex64::new(0.0, omega * z_bottom));
+            let mut state = (
+                Complex64::new(1.0, 0.0),
+                Complex64::new(0.0, omega * z_bottom),
+            );
             let mut bottom = 0.0;
             for &(c, rho, d) in &layers {
                 let part = (y - bottom).clamp(0.0, d);
@@ -213,18 +220,26 @@ const E0: f64 = 4e-3;
 #[test]
 fn plane_wave_through_a_layer_stack_matches_the_transfer_matrix_solution_at_second_order() {
     let hs = [H0, H0 / 2.0, H0 / 4.0];
-    let runs: Vec<(Vec<f64>, Vec<Signal>)> =
-        hs.iter().map(|&h| errors(h, EdgeCondition::Roller, None)).collect();
+    let runs: Vec<(Vec<f64>, Vec<Signal>)> = hs
+        .iter()
+        .map(|&h| errors(h, EdgeCondition::Roller, None))
+        .collect();
     for (&h, (e, traces)) in hs.iter().zip(&runs) {
         let listed: Vec<String> = e.iter().map(|v| format!("{v:.3e}")).collect();
         eprintln!("h = {h:e} m: relative L2 errors {}", listed.join(", "));
         let bound = E0 * (h / H0).powi(2);
         for (p, &err) in POINTS.iter().zip(e) {
-            assert!(err < bound, "h = {h:e}: receiver at {p:?} error {err:.3e} > {bound:.3e}");
+            assert!(
+                err < bound,
+                "h = {h:e}: receiver at {p:?} error {err:.3e} > {bound:.3e}"
+            );
         }
         // the top-surface point receiver sits on a node: the same trace as the nearest-node
         // receiver of x_m, bit for bit
-        assert_eq!(traces[0].samples, traces[3].samples, "node-coincident receiver");
+        assert_eq!(
+            traces[0].samples, traces[3].samples,
+            "node-coincident receiver"
+        );
     }
     for p in 0..POINTS.len() {
         let e: Vec<f64> = runs.iter().map(|r| r.0[p]).collect();
@@ -249,7 +264,10 @@ fn receivers_on_nodes_take_the_node_alone_and_off_nodes_the_holding_element() {
         assert_eq!(w, 1.0);
         assert_eq!(d % 2, 1, "u_y");
         let p = nodes[d / 2];
-        assert!((p[0] - x).abs() < 1e-15 && (p[1] - y).abs() < 1e-15, "{p:?}");
+        assert!(
+            (p[0] - x).abs() < 1e-15 && (p[1] - y).abs() < 1e-15,
+            "{p:?}"
+        );
     }
     // off-node points: three weights, the barycentric coordinates, reproducing the point
     for (r, &(x, y)) in scene.receivers[4..].iter().zip(&POINTS[3..]) {
@@ -258,7 +276,10 @@ fn receivers_on_nodes_take_the_node_alone_and_off_nodes_the_holding_element() {
         assert!(r.weights.iter().all(|w| w.1 > 0.0 && w.1 < 1.0));
         let px: f64 = r.weights.iter().map(|&(d, w)| w * nodes[d / 2][0]).sum();
         let py: f64 = r.weights.iter().map(|&(d, w)| w * nodes[d / 2][1]).sum();
-        assert!((px - x).abs() < 1e-15 && (py - y).abs() < 1e-15, "({px}, {py})");
+        assert!(
+            (px - x).abs() < 1e-15 && (py - y).abs() < 1e-15,
+            "({px}, {py})"
+        );
     }
 }
 
@@ -373,7 +394,10 @@ fn a_periodic_cell_responds_like_the_middle_of_a_row_of_its_copies() {
     let mut row = epoxy_block(copies as f64 * cell, EdgeCondition::Free);
     row.sources = (0..copies).flat_map(|k| sources(k as f64 * cell)).collect();
     row.receivers = receivers(4.0 * cell, false);
-    let (p, r) = (Scene::build(&periodic).unwrap(), Scene::build(&row).unwrap());
+    let (p, r) = (
+        Scene::build(&periodic).unwrap(),
+        Scene::build(&row).unwrap(),
+    );
     let dt = p.default_dt_s().min(r.default_dt_s());
     let duration = 1.4e-6;
     let drive = Signal {

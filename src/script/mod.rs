@@ -151,6 +151,9 @@ pub struct HostContext {
     params: BTreeMap<String, Dynamic>,
     quiet: bool,
     script: RwLock<String>,
+    /// The directory scripts read input files from: the running script's directory (`None`
+    /// for script text without a file).
+    input_dir: RwLock<Option<PathBuf>>,
     progress: RwLock<Option<indicatif::ProgressBar>>,
 }
 
@@ -204,6 +207,47 @@ impl HostContext {
             return Err(format!("output path '{path}' names no file"));
         }
         Ok(self.out_dir.join(rel))
+    }
+
+    /// Reads an input file a script names (a mesh): `path` relative to the input directory,
+    /// the running script's directory. Absolute paths and `..` are refused, naming the path;
+    /// the file is opened beneath the directory handle by cap-std, so a symlink that leads
+    /// out of the directory is refused too (the same confinement as writes, see
+    /// [`crate::io::OutputRoot`]). Every script input goes through here.
+    pub fn read_input(&self, path: &str) -> Result<Vec<u8>, String> {
+        let rel = Path::new(path);
+        if path.is_empty() {
+            return Err("input path is empty".into());
+        }
+        if rel.has_root() || rel.is_absolute() {
+            return Err(format!(
+                "input path '{path}' is absolute; give a path relative to the script's directory"
+            ));
+        }
+        if rel
+            .components()
+            .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
+        {
+            return Err(format!(
+                "input path '{path}' leaves the script's directory ('..' is not allowed)"
+            ));
+        }
+        let dir = self
+            .input_dir
+            .read()
+            .ok()
+            .and_then(|d| d.clone())
+            .ok_or_else(|| {
+                format!("cannot read '{path}': this script has no directory to read from")
+            })?;
+        let root = cap_std::fs::Dir::open_ambient_dir(&dir, cap_std::ambient_authority())
+            .map_err(|e| format!("cannot open the input directory {}: {e}", dir.display()))?;
+        root.read(rel).map_err(|e| {
+            format!(
+                "cannot read '{path}' in {} (files must lie inside it, symlinks included): {e}",
+                dir.display()
+            )
+        })
     }
 
     /// Prints a script message to stderr, prefixed with the script name, without
@@ -297,6 +341,7 @@ impl Host {
             params: options.params,
             quiet: options.quiet,
             script: RwLock::new(String::new()),
+            input_dir: RwLock::new(None),
             progress: RwLock::new(None),
         });
         let engine = build_engine(&context, options.max_operations);
@@ -323,7 +368,18 @@ impl Host {
     /// Compiles and runs the script at `path`.
     pub fn run_file(&self, path: &Path) -> Result<(), ScriptError> {
         let (name, text) = read_script(path)?;
-        self.run_str(&name, &text)
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        if let Ok(mut d) = self.context.input_dir.write() {
+            *d = Some(dir);
+        }
+        let result = self.run_str(&name, &text);
+        if let Ok(mut d) = self.context.input_dir.write() {
+            *d = None;
+        }
+        result
     }
 
     /// Compiles and runs script text; `name` is used in messages.
