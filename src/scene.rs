@@ -257,6 +257,26 @@ pub struct ReceiverAt {
     pub depth_m: Option<f64>,
 }
 
+impl ReceiverAt {
+    /// The fields given, as a script writes them: `#{edge: "left", x_m: 0.001}`.
+    fn describe(&self) -> String {
+        let mut fields = Vec::new();
+        if let Some(e) = self.edge {
+            fields.push(format!("edge: \"{}\"", e.name()));
+        }
+        for (name, v) in [
+            ("x_m", self.x_m),
+            ("y_m", self.y_m),
+            ("depth_m", self.depth_m),
+        ] {
+            if let Some(v) = v {
+                fields.push(format!("{name}: {v}"));
+            }
+        }
+        format!("#{{{}}}", fields.join(", "))
+    }
+}
+
 /// The condition on one edge of the region.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -1449,7 +1469,7 @@ fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Rec
                     _ => {
                         return Err(Error::invalid(
                             field,
-                            format!("{at:?}"),
+                            at.describe(),
                             format!(
                                 "a receiver on the {} edge needs {} alone",
                                 edge.name(),
@@ -1463,7 +1483,7 @@ fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Rec
             _ => {
                 return Err(Error::invalid(
                     field,
-                    format!("{at:?}"),
+                    at.describe(),
                     "give #{x_m, y_m} for a point in the body, #{edge, x_m} on the top or \
                      bottom edge, or #{edge, depth_m} on the left or right edge",
                 ))
