@@ -241,14 +241,13 @@ fn plane_wave_through_a_layer_stack_matches_the_transfer_matrix_solution_at_seco
             "node-coincident receiver"
         );
     }
-    for p in 0..POINTS.len() {
+    for (p, point) in POINTS.iter().enumerate() {
         let e: Vec<f64> = runs.iter().map(|r| r.0[p]).collect();
         let orders: Vec<f64> = e.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
-        eprintln!("receiver at {:?}: observed orders {orders:.2?}", POINTS[p]);
+        eprintln!("receiver at {point:?}: observed orders {orders:.2?}");
         assert!(
             orders.iter().all(|&o| o > 1.7),
-            "receiver at {:?}: orders {orders:?}",
-            POINTS[p]
+            "receiver at {point:?}: orders {orders:?}"
         );
     }
 }

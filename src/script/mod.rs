@@ -716,8 +716,34 @@ mod tests {
             params: BTreeMap::new(),
             quiet: true,
             script: RwLock::new(String::new()),
+            input_dir: RwLock::new(Some(dir.to_path_buf())),
             progress: RwLock::new(None),
         }
+    }
+
+    #[test]
+    fn input_paths_stay_under_the_input_dir() {
+        let dir = std::env::temp_dir().join(format!("trnews-input-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        std::fs::write(dir.join("sub/a.txt"), "x").unwrap();
+        let c = context(&dir);
+        assert_eq!(c.read_input("sub/a.txt").unwrap(), b"x");
+        assert_eq!(c.read_input("./sub/a.txt").unwrap(), b"x");
+        assert!(c.read_input("../a.txt").unwrap_err().contains("'..'"));
+        assert!(c
+            .read_input("sub/../sub/a.txt")
+            .unwrap_err()
+            .contains("'..'"));
+        assert!(c
+            .read_input("/etc/passwd")
+            .unwrap_err()
+            .contains("absolute"));
+        assert!(c.read_input("").unwrap_err().contains("empty"));
+        assert!(c
+            .read_input("sub/none.txt")
+            .unwrap_err()
+            .contains("sub/none.txt"));
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
