@@ -488,13 +488,22 @@ impl SceneSpec {
     }
 
     /// The same scene (same laminate draw) with element sizes multiplied by `factor`: the
-    /// companions of an error estimate ([`crate::accuracy`]).
-    pub fn coarsened(&self, factor: f64) -> SceneSpec {
-        SceneSpec {
+    /// companions of an error estimate ([`crate::accuracy`]). A Gmsh scene has no element
+    /// sizes to change (its mesh is the file's): an error.
+    pub fn coarsened(&self, factor: f64) -> Result<SceneSpec> {
+        if let Some(g) = &self.gmsh {
+            return Err(Error::invalid(
+                "gmsh.path",
+                &g.path,
+                "error estimates and tolerances refine the layered scene's mesh; a Gmsh \
+                 scene's mesh is the file's (run without error_estimate or tolerance)",
+            ));
+        }
+        Ok(SceneSpec {
             element_size_x_m: self.element_size_x_m * factor,
             element_size_y_m: self.element_size_y_m * factor,
             ..self.clone()
-        }
+        })
     }
 
     /// The uncracked companion: the same scene with the crack's faces tied. It has the same

@@ -84,7 +84,7 @@ impl Responder {
     pub fn companion_scenes(&self) -> Result<(Vec<Arc<Scene>>, f64)> {
         let scenes = [2.0, 4.0]
             .into_iter()
-            .map(|factor| Ok(Arc::new(Scene::build(&self.scene.spec.coarsened(factor))?)))
+            .map(|factor| Ok(Arc::new(Scene::build(&self.scene.spec.coarsened(factor)?)?)))
             .collect::<Result<Vec<_>>>()?;
         let work = |s: &Scene, dt: f64| s.model.dofs() as f64 / dt;
         let cost = scenes
