@@ -580,9 +580,23 @@ fn build_laminate(spec: &LaminateSpec, plane: Plane) -> Result<Laminate> {
     }
 }
 
-/// The layered rectangle: laminate, its mesh, the crack placed on the mesh lines, and the
-/// x of the right edge and y of the top edge.
-fn layered_mesh(spec: &SceneSpec) -> Result<(Laminate, Mesh, Option<CrackPlacement>, f64, f64)> {
+/// The rectangle a scene occupies: lower left corner and size (m). Sources, receivers and
+/// the viscous-spring distances are placed in it.
+#[derive(Clone, Copy, Debug)]
+struct Region {
+    x0: f64,
+    y0: f64,
+    width: f64,
+    height: f64,
+}
+
+/// What a scene is built on: the materials (as a laminate), the mesh, the crack's place on
+/// it, and the region.
+type Built = (Laminate, Mesh, Option<CrackPlacement>, Region);
+
+/// The layered rectangle [0, width_m] x [0, laminate thickness]: laminate, its mesh and the
+/// crack placed on the mesh lines.
+fn layered_mesh(spec: &SceneSpec) -> Result<Built> {
     require_positive("width_m", spec.width_m)?;
     let laminate = build_laminate(&spec.laminate, spec.plane)?;
     let height = laminate.thickness_m();
@@ -600,15 +614,18 @@ fn layered_mesh(spec: &SceneSpec) -> Result<(Laminate, Mesh, Option<CrackPlaceme
         .as_ref()
         .map(|c| place_crack(spec, c, &mesh, height))
         .transpose()?;
-    Ok((laminate, mesh, crack_placement, spec.width_m, height))
+    let region = Region {
+        x0: 0.0,
+        y0: 0.0,
+        width: spec.width_m,
+        height,
+    };
+    Ok((laminate, mesh, crack_placement, region))
 }
 
-/// The Gmsh scene: its materials (as a laminate without layers), mesh, crack line, and the
-/// x of the right edge and y of the top edge of the bounding box.
-fn gmsh_mesh(
-    spec: &SceneSpec,
-    g: &GmshSpec,
-) -> Result<(Laminate, Mesh, Option<CrackPlacement>, f64, f64)> {
+/// The Gmsh scene: its materials (as a laminate without layers), mesh and crack line; the
+/// region is the mesh's bounding box.
+fn gmsh_mesh(spec: &SceneSpec, g: &GmshSpec) -> Result<Built> {
     if spec.crack.is_some() {
         return Err(Error::invalid(
             "crack",
@@ -642,13 +659,19 @@ fn gmsh_mesh(
         .crack_line
         .map(|group| gmsh_crack(&bytes, group, &mesh, g.tied))
         .transpose()?;
-    let (_, x1, _, y1) = mesh.bounds();
+    let (x0, x1, y0, y1) = mesh.bounds();
     let laminate = Laminate {
         materials,
         layers: vec![],
         draws: vec![],
     };
-    Ok((laminate, mesh, placement, x1, y1))
+    let region = Region {
+        x0,
+        y0,
+        width: x1 - x0,
+        height: y1 - y0,
+    };
+    Ok((laminate, mesh, placement, region))
 }
 
 /// The crack of a Gmsh scene: the nodes of physical line `group`, which must be a
@@ -713,7 +736,7 @@ impl Scene {
     /// omega_max(tied) <= omega_max(split), and contact by exact multipliers only constrains
     /// the split model further (report Sec. 4.8.2, 4.9).
     pub fn build(spec: &SceneSpec) -> Result<Scene> {
-        let (laminate, mut mesh, crack_placement, width, height) = match &spec.gmsh {
+        let (laminate, mut mesh, crack_placement, region) = match &spec.gmsh {
             None => layered_mesh(spec)?,
             Some(g) => gmsh_mesh(spec, g)?,
         };
@@ -736,11 +759,11 @@ impl Scene {
             ));
         }
         let transmitter = if spec.sources.is_empty() {
-            transmitter_weights(&mesh, &spec.transmitter, height, width)?
+            transmitter_weights(&mesh, &spec.transmitter, region)?
         } else {
             source_weights(&mesh, &spec.sources)?
         };
-        let receivers = build_receivers(&mesh, &spec.receivers, height)?;
+        let receivers = build_receivers(&mesh, &spec.receivers, region.y0 + region.height)?;
         let contact = match &spec.gmsh {
             None => spec
                 .crack
@@ -749,8 +772,11 @@ impl Scene {
                 .and_then(|c| c.contact),
             Some(g) => g.crack_line.filter(|_| !g.tied).and(g.contact),
         };
-        let absorbing = absorbing_edges(spec, &conditions, &mesh)?;
+        let absorbing = absorbing_edges(spec, &conditions, &mesh, region)?;
         let mut model = Model::build(mesh, laminate.materials.clone(), &absorbing, fixed, crack)?;
+        // The stability estimate below is the untied model's: tying restricts it to the
+        // subspace u_l = u_r, which by the Rayleigh-quotient principle can only lower
+        // omega_max (as for the crack's tied companion), so the step stays stable.
         if is_periodic(&conditions) {
             model.tie_periodic()?;
         }
@@ -1146,6 +1172,7 @@ fn absorbing_edges(
     spec: &SceneSpec,
     conditions: &[(Side, EdgeCondition); 4],
     mesh: &Mesh,
+    region: Region,
 ) -> Result<Vec<AbsorbingEdge>> {
     let absorbs = |side: Side| {
         conditions
@@ -1163,9 +1190,7 @@ fn absorbing_edges(
             sides.push(side);
         }
     }
-    let (x0, x1, y0, y1) = mesh.bounds();
-    let (width, height) = (x1 - x0, y1 - y0);
-    let source = source_centre(spec, mesh);
+    let source = source_centre(spec, mesh, region);
     sides
         .iter()
         .map(|&side| {
@@ -1176,7 +1201,12 @@ fn absorbing_edges(
                 } => Some(r),
                 Absorber::ViscousSpring {
                     source_distance_m: None,
-                } => Some(transmitter_distance(side, source, width, height)?),
+                } => Some(transmitter_distance(
+                    side,
+                    source,
+                    region.width,
+                    region.height,
+                )?),
             };
             Ok(AbsorbingEdge {
                 side,
@@ -1188,12 +1218,15 @@ fn absorbing_edges(
 
 /// The centre of the transmitter's segment, or of the first source (relative to the lower
 /// left corner of the region): where the viscous-spring distance R is measured from.
-fn source_centre(spec: &SceneSpec, mesh: &Mesh) -> [f64; 2] {
-    let (x0, x1, y0, y1) = mesh.bounds();
+fn source_centre(spec: &SceneSpec, mesh: &Mesh, region: Region) -> [f64; 2] {
     let t = &spec.transmitter;
     let Some(first) = spec.sources.first() else {
-        return [x1 - x0, y1 - y0 - 0.5 * (t.depth_top_m + t.depth_bottom_m)];
+        return [
+            region.width,
+            region.height - 0.5 * (t.depth_top_m + t.depth_bottom_m),
+        ];
     };
+    let (x0, y0) = (region.x0, region.y0);
     let p = match first {
         SourceSpec::Point { x_m, y_m, .. } => [*x_m, *y_m],
         SourceSpec::Traction {
@@ -1248,9 +1281,9 @@ fn bottom_corner_dofs(mesh: &Mesh) -> Vec<usize> {
 fn transmitter_weights(
     mesh: &Mesh,
     t: &TransmitterSpec,
-    height: f64,
-    width: f64,
+    region: Region,
 ) -> Result<Vec<(usize, f64)>> {
+    let height = region.height;
     if !(t.depth_top_m >= 0.0 && t.depth_bottom_m > t.depth_top_m && t.depth_bottom_m <= height) {
         return Err(Error::invalid(
             "transmitter",
@@ -1263,10 +1296,11 @@ fn transmitter_weights(
         t0_s: 0.0,
         samples: vec![1.0],
     };
+    let (right, top) = (region.x0 + region.width, region.y0 + height);
     Ok(traction_source(
         mesh,
-        [width, height - t.depth_top_m],
-        [width, height - t.depth_bottom_m],
+        [right, top - t.depth_top_m],
+        [right, top - t.depth_bottom_m],
         t.angle_deg,
         unit,
     )?
