@@ -4,8 +4,10 @@
 //!
 //! The step is split so that it costs O(DOFs) only once: a fused parallel kernel computes
 //! the undamped, unforced update u_{n+1} = 2 u_n - u_{n-1} - (dt^2/m)(K u_n) for every DOF,
-//! then sparse corrections touch only what the scene has: source DOFs, dashpot DOFs, crack
-//! pairs. Fixed DOFs have dt^2/m = 0 and so never move. Nothing is allocated per step.
+//! then sparse corrections touch only what the scene has: source DOFs, periodic ties (each
+//! tied pair takes the mass-weighted mean of its two updates, the update of one DOF of mass
+//! m_l + m_r under the force f_l + f_r), dashpot DOFs, crack pairs. Fixed DOFs have
+//! dt^2/m = 0 and so never move. Nothing is allocated per step.
 //! The kernel is [`StiffnessOperator::explicit_update`]: matrix-free stencils on structured
 //! meshes, the assembled K elsewhere.
 
