@@ -11,8 +11,8 @@ use crate::material::{Orthotropic, Plane};
 use crate::mesh::{Mesh, Side};
 use crate::signal::Signal;
 use crate::solve::{
-    self, segment_receiver, traction_source, Integrator, Quantity, Receiver, RunConfig, RunOutput,
-    StabilityEstimate,
+    self, point_receiver, segment_receiver, segment_shares, traction_source, Integrator, Quantity,
+    Receiver, RunConfig, RunOutput, StabilityEstimate,
 };
 use crate::transducer::TransducerSpec;
 use serde::{Deserialize, Serialize};
@@ -28,6 +28,46 @@ pub enum LaminateSpec {
         /// Layers, top first.
         layers: Vec<LayerSpec>,
     },
+    /// A homogeneous block: one layer.
+    Homogeneous {
+        /// Its material.
+        material: MaterialSpec,
+        /// Thickness (m).
+        thickness_m: f64,
+    },
+}
+
+/// A scene meshed by Gmsh: the T3 elements of an MSH 4.1 file (see
+/// [`crate::mesh::gmsh::read_msh`]), materials by physical surface group, and optionally a
+/// crack drawn as a physical line. The region's edges are the sides of the mesh's bounding
+/// box (sources, receivers and edge conditions refer to them); `laminate`, `width_m` and
+/// the element sizes are not used.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GmshSpec {
+    /// The .msh file. Scripts give it relative to their input directory (the script's
+    /// directory), see [`crate::script::HostContext::read_input`].
+    pub path: String,
+    /// The material of each physical surface group, keyed by the group's tag (`"1"`).
+    pub materials: std::collections::BTreeMap<String, MaterialSpec>,
+    /// Tag of the physical line that is the crack: a horizontal straight line of element
+    /// edges strictly inside the mesh (contact acts on u_y, report Sec. 4.9).
+    #[serde(default)]
+    pub crack_line: Option<i32>,
+    /// Contact on the crack faces; `None` leaves the crack open.
+    #[serde(default = "default_contact")]
+    pub contact: Option<ContactOptions>,
+    /// Faces tied (the uncracked companion, [`SceneSpec::uncracked`]).
+    #[serde(default)]
+    pub tied: bool,
+    /// The file's bytes when the caller has read it (scripts read it inside their sandbox);
+    /// `None` reads `path`.
+    #[serde(skip)]
+    pub bytes: Option<std::sync::Arc<Vec<u8>>>,
+}
+
+fn default_contact() -> Option<ContactOptions> {
+    Some(ContactOptions::default())
 }
 
 /// A material by preset name (`epoxy`, `fabric_0_90`, `fabric_45_45`) or by its constants.
@@ -91,30 +131,183 @@ impl Default for TransmitterSpec {
     }
 }
 
-/// Receivers on the top surface, numbered 1.. from left to right (the last one nearest the
-/// transmitter, like the report's receiver 5).
+/// The receivers: on the top surface at `x_m`, numbered 1.. from left to right (the last one
+/// nearest the transmitter, like the report's receiver 5), then those of `at`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ReceiverSpec {
     /// x positions (m).
     pub x_m: Vec<f64>,
-    /// Width of the transducer face averaged over (m); 0 records the nearest node.
+    /// Width of the transducer face averaged over, for receivers on an edge (m); 0 records
+    /// the nearest node.
     pub aperture_m: f64,
     /// Recorded component: 0 = u_x, 1 = u_y (default, like a normal-incidence transducer).
     pub component: usize,
     /// Displacement or velocity.
     pub quantity: Quantity,
+    /// More receivers, numbered after those of `x_m`: points in the body or positions on any
+    /// edge.
+    pub at: Vec<ReceiverAt>,
 }
 
 impl Default for ReceiverSpec {
     fn default() -> Self {
         ReceiverSpec {
             x_m: vec![4e-3, 6e-3, 8e-3, 10e-3, 12e-3],
+            at: vec![],
             aperture_m: 0.0,
             component: 1,
             quantity: Quantity::Displacement,
         }
     }
+}
+
+/// A source of the transmitted signal. Every source of a scene is driven by the same
+/// signal (Pa), scaled by its `scale`; their nodal loads add. Edge sources act on a range
+/// along their edge, `x_m: [from, to]` on the top and bottom edges and
+/// `depth_m: [from, to]` below the top surface on the left and right edges, or on the whole
+/// edge without a range; the load is the consistent nodal load of a uniform traction.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind", deny_unknown_fields)]
+pub enum SourceSpec {
+    /// A traction in a fixed direction: t = scale (cos angle, sin angle) drive(t).
+    Traction {
+        /// The edge.
+        edge: Side,
+        /// x range on the top or bottom edge (m).
+        #[serde(default)]
+        x_m: Option<[f64; 2]>,
+        /// Depth range below the top surface on the left or right edge (m).
+        #[serde(default)]
+        depth_m: Option<[f64; 2]>,
+        /// Direction, degrees counter-clockwise from +x.
+        angle_deg: f64,
+        /// Factor on the drive signal.
+        #[serde(default = "unit_scale")]
+        scale: f64,
+    },
+    /// A uniform normal traction t = scale drive(t) n, n the outward normal of the edge
+    /// (positive pulls the surface outward).
+    Normal {
+        /// The edge.
+        edge: Side,
+        /// x range on the top or bottom edge (m).
+        #[serde(default)]
+        x_m: Option<[f64; 2]>,
+        /// Depth range below the top surface on the left or right edge (m).
+        #[serde(default)]
+        depth_m: Option<[f64; 2]>,
+        /// Factor on the drive signal.
+        #[serde(default = "unit_scale")]
+        scale: f64,
+    },
+    /// A uniform shear traction t = scale drive(t) e, e = +x on the top and bottom edges and
+    /// +y on the left and right edges.
+    Shear {
+        /// The edge.
+        edge: Side,
+        /// x range on the top or bottom edge (m).
+        #[serde(default)]
+        x_m: Option<[f64; 2]>,
+        /// Depth range below the top surface on the left or right edge (m).
+        #[serde(default)]
+        depth_m: Option<[f64; 2]>,
+        /// Factor on the drive signal.
+        #[serde(default = "unit_scale")]
+        scale: f64,
+    },
+    /// A point force on the node nearest to (x_m, y_m), y above the bottom edge: force per
+    /// unit thickness scale (m) x drive (Pa), in N/m, in direction `angle_deg`.
+    Point {
+        /// x (m).
+        x_m: f64,
+        /// y above the bottom edge (m).
+        y_m: f64,
+        /// Direction, degrees counter-clockwise from +x.
+        angle_deg: f64,
+        /// Factor on the drive signal (m).
+        #[serde(default = "unit_scale")]
+        scale: f64,
+    },
+}
+
+fn unit_scale() -> f64 {
+    1.0
+}
+
+/// A receiver beyond the top-surface row of [`ReceiverSpec::x_m`]: a point anywhere in the
+/// body, `#{x_m, y_m}` (y above the bottom edge), interpolated from the T3 element that
+/// holds it with its linear shape functions (barycentric weights); or a position on an
+/// edge, `#{edge, x_m}` (top, bottom) or `#{edge, depth_m}` (left, right), averaged over the
+/// transducer aperture like the top-surface receivers.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReceiverAt {
+    /// The edge, for an edge receiver.
+    #[serde(default)]
+    pub edge: Option<Side>,
+    /// x (m): of a point, or along the top or bottom edge.
+    #[serde(default)]
+    pub x_m: Option<f64>,
+    /// y above the bottom edge (m), of a point.
+    #[serde(default)]
+    pub y_m: Option<f64>,
+    /// Depth below the top surface along the left or right edge (m).
+    #[serde(default)]
+    pub depth_m: Option<f64>,
+}
+
+impl ReceiverAt {
+    /// The fields given, as a script writes them: `#{edge: "left", x_m: 0.001}`.
+    fn describe(&self) -> String {
+        let mut fields = Vec::new();
+        if let Some(e) = self.edge {
+            fields.push(format!("edge: \"{}\"", e.name()));
+        }
+        for (name, v) in [
+            ("x_m", self.x_m),
+            ("y_m", self.y_m),
+            ("depth_m", self.depth_m),
+        ] {
+            if let Some(v) = v {
+                fields.push(format!("{name}: {v}"));
+            }
+        }
+        format!("#{{{}}}", fields.join(", "))
+    }
+}
+
+/// The condition on one edge of the region.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EdgeCondition {
+    /// Traction-free.
+    Free,
+    /// Both displacement components zero.
+    Fixed,
+    /// Roller: the normal displacement is zero and the edge slides freely (u_n = 0, t_s = 0).
+    Roller,
+    /// Absorbing, as [`SceneSpec::absorber`] says (Lysmer-Kuhlemeyer dashpots, with or
+    /// without the springs of the viscous-spring boundary).
+    Absorbing,
+    /// Periodic, left and right together: the node columns x = 0 and x = width are tied,
+    /// u(0, y) = u(width, y) (see [`crate::fem::Model::periodic`]).
+    Periodic,
+}
+
+/// Conditions per edge; an edge left out keeps what [`SceneSpec::absorbing`] gives it
+/// (absorbing if listed, free otherwise).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EdgeConditions {
+    /// Bottom edge.
+    pub bottom: Option<EdgeCondition>,
+    /// Top edge.
+    pub top: Option<EdgeCondition>,
+    /// Left edge.
+    pub left: Option<EdgeCondition>,
+    /// Right edge.
+    pub right: Option<EdgeCondition>,
 }
 
 /// How the absorbing sides absorb.
@@ -187,6 +380,9 @@ pub struct SceneSpec {
     pub element_size_y_m: f64,
     /// Absorbing sides (report Fig. 3: bottom and left), the rest of the region's edge is free.
     pub absorbing: Vec<Side>,
+    /// Conditions per edge (free, fixed, roller, absorbing, periodic), overriding `absorbing`
+    /// for the edges they name.
+    pub edges: EdgeConditions,
     /// How the absorbing sides absorb (default: viscous-spring; `#{kind: "dashpot"}` is the
     /// report's).
     pub absorber: Absorber,
@@ -200,10 +396,15 @@ pub struct SceneSpec {
     pub transducer: Option<TransducerSpec>,
     /// The transmitter.
     pub transmitter: TransmitterSpec,
+    /// Sources of the transmitted signal; when given, they replace the transmitter's segment
+    /// (`transmitter.peak_pa` still scales the focusing signals). Empty: the transmitter.
+    pub sources: Vec<SourceSpec>,
     /// The receivers.
     pub receivers: ReceiverSpec,
     /// The crack, if any.
     pub crack: Option<CrackSpec>,
+    /// A mesh from a Gmsh file instead of the layered rectangle (`None`: the laminate).
+    pub gmsh: Option<GmshSpec>,
 }
 
 impl Default for SceneSpec {
@@ -215,14 +416,17 @@ impl Default for SceneSpec {
             element_size_x_m: 60e-6,
             element_size_y_m: 40e-6,
             absorbing: vec![Side::Bottom, Side::Left],
+            edges: EdgeConditions::default(),
             absorber: Absorber::ViscousSpring {
                 source_distance_m: None,
             },
             fix_bottom_corners: false,
             transducer: Some(TransducerSpec::default()),
             transmitter: TransmitterSpec::default(),
+            sources: vec![],
             receivers: ReceiverSpec::default(),
             crack: Some(CrackSpec::default()),
+            gmsh: None,
         }
     }
 }
@@ -284,13 +488,22 @@ impl SceneSpec {
     }
 
     /// The same scene (same laminate draw) with element sizes multiplied by `factor`: the
-    /// companions of an error estimate ([`crate::accuracy`]).
-    pub fn coarsened(&self, factor: f64) -> SceneSpec {
-        SceneSpec {
+    /// companions of an error estimate ([`crate::accuracy`]). A Gmsh scene has no element
+    /// sizes to change (its mesh is the file's): an error.
+    pub fn coarsened(&self, factor: f64) -> Result<SceneSpec> {
+        if let Some(g) = &self.gmsh {
+            return Err(Error::invalid(
+                "gmsh.path",
+                &g.path,
+                "error estimates and tolerances refine the layered scene's mesh; a Gmsh \
+                 scene's mesh is the file's (run without error_estimate or tolerance)",
+            ));
+        }
+        Ok(SceneSpec {
             element_size_x_m: self.element_size_x_m * factor,
             element_size_y_m: self.element_size_y_m * factor,
             ..self.clone()
-        }
+        })
     }
 
     /// The uncracked companion: the same scene with the crack's faces tied. It has the same
@@ -303,6 +516,10 @@ impl SceneSpec {
             crack: self.crack.as_ref().map(|c| CrackSpec {
                 tied: true,
                 ..c.clone()
+            }),
+            gmsh: self.gmsh.as_ref().map(|g| GmshSpec {
+                tied: true,
+                ..g.clone()
             }),
             ..self.clone()
         }
@@ -356,7 +573,154 @@ fn build_laminate(spec: &LaminateSpec, plane: Plane) -> Result<Laminate> {
                 .collect::<Result<Vec<_>>>()?;
             Laminate::from_layers(materials, stack)
         }
+        LaminateSpec::Homogeneous {
+            material,
+            thickness_m,
+        } => Laminate::homogeneous(material.constants()?.reduce(plane)?, *thickness_m),
     }
+}
+
+/// The rectangle a scene occupies: lower left corner and size (m). Sources, receivers and
+/// the viscous-spring distances are placed in it.
+#[derive(Clone, Copy, Debug)]
+struct Region {
+    x0: f64,
+    y0: f64,
+    width: f64,
+    height: f64,
+}
+
+/// What a scene is built on: the materials (as a laminate), the mesh, the crack's place on
+/// it, and the region.
+type Built = (Laminate, Mesh, Option<CrackPlacement>, Region);
+
+/// The layered rectangle [0, width_m] x [0, laminate thickness]: laminate, its mesh and the
+/// crack placed on the mesh lines.
+fn layered_mesh(spec: &SceneSpec) -> Result<Built> {
+    require_positive("width_m", spec.width_m)?;
+    let laminate = build_laminate(&spec.laminate, spec.plane)?;
+    let height = laminate.thickness_m();
+    check_mesh_size(spec, &laminate)?;
+    let mesh = Mesh::layered(
+        &laminate,
+        spec.width_m,
+        spec.element_size_x_m,
+        spec.element_size_y_m,
+        &[],
+        &[],
+    )?;
+    let crack_placement = spec
+        .crack
+        .as_ref()
+        .map(|c| place_crack(spec, c, &mesh, height))
+        .transpose()?;
+    let region = Region {
+        x0: 0.0,
+        y0: 0.0,
+        width: spec.width_m,
+        height,
+    };
+    Ok((laminate, mesh, crack_placement, region))
+}
+
+/// The Gmsh scene: its materials (as a laminate without layers), mesh and crack line; the
+/// region is the mesh's bounding box.
+fn gmsh_mesh(spec: &SceneSpec, g: &GmshSpec) -> Result<Built> {
+    if spec.crack.is_some() {
+        return Err(Error::invalid(
+            "crack",
+            "a rectangular crack",
+            "a Gmsh scene takes its crack from gmsh.crack_line: set crack: ()",
+        ));
+    }
+    let bytes =
+        match &g.bytes {
+            Some(b) => b.clone(),
+            None => std::sync::Arc::new(std::fs::read(&g.path).map_err(|e| {
+                Error::invalid("gmsh.path", &g.path, format!("cannot be read: {e}"))
+            })?),
+        };
+    let mut materials = Vec::with_capacity(g.materials.len());
+    let mut groups = std::collections::HashMap::new();
+    for (key, material) in &g.materials {
+        let tag: i32 = key.trim().parse().map_err(|_| {
+            Error::invalid(
+                "gmsh.materials",
+                format!("key \"{key}\""),
+                "keys are the tags of physical surface groups, e.g. \"1\"",
+            )
+        })?;
+        groups.insert(tag, materials.len());
+        materials.push(material.constants()?.reduce(spec.plane)?);
+    }
+    let mesh = crate::mesh::gmsh::read_msh(&bytes, &groups)
+        .map_err(|e| Error::invalid("gmsh.path", &g.path, e.to_string()))?;
+    let placement = g
+        .crack_line
+        .map(|group| gmsh_crack(&bytes, group, &mesh, g.tied))
+        .transpose()?;
+    let (x0, x1, y0, y1) = mesh.bounds();
+    let laminate = Laminate {
+        materials,
+        layers: vec![],
+        draws: vec![],
+    };
+    let region = Region {
+        x0,
+        y0,
+        width: x1 - x0,
+        height: y1 - y0,
+    };
+    Ok((laminate, mesh, placement, region))
+}
+
+/// The crack of a Gmsh scene: the nodes of physical line `group`, which must be a
+/// horizontal straight line of mesh nodes (every node of the mesh on its segment belongs to
+/// it; that its consecutive nodes are element edges is checked when it is inserted).
+fn gmsh_crack(bytes: &[u8], group: i32, mesh: &Mesh, tied: bool) -> Result<CrackPlacement> {
+    let points = crate::mesh::gmsh::read_physical_line(bytes, group)
+        .map_err(|e| Error::invalid("gmsh.crack_line", group, e.to_string()))?;
+    let y = points[0][1];
+    let tol = mesh.tolerance();
+    if let Some(p) = points.iter().find(|p| (p[1] - y).abs() > tol) {
+        return Err(Error::invalid(
+            "gmsh.crack_line",
+            group,
+            format!(
+                "the crack must be a horizontal straight line (contact acts on u_y): it has \
+                 points at y = {y:e} and {:e} m",
+                p[1]
+            ),
+        ));
+    }
+    let x0 = points.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min);
+    let x1 = points
+        .iter()
+        .map(|p| p[0])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let on_segment = mesh.nodes_on_segment([x0, y], [x1, y]).len();
+    if on_segment != points.len() {
+        return Err(Error::invalid(
+            "gmsh.crack_line",
+            group,
+            format!(
+                "the line has {} nodes but the mesh has {on_segment} on its segment: the crack \
+                 must be one unbroken line of element edges",
+                points.len()
+            ),
+        ));
+    }
+    let top = mesh.bounds().3;
+    Ok(CrackPlacement {
+        depth_requested_m: top - y,
+        depth_used_m: top - y,
+        x0_requested_m: x0,
+        x0_used_m: x0,
+        x1_requested_m: x1,
+        x1_used_m: x1,
+        tied,
+        y_m: y,
+    })
 }
 
 impl Scene {
@@ -372,32 +736,21 @@ impl Scene {
     /// omega_max(tied) <= omega_max(split), and contact by exact multipliers only constrains
     /// the split model further (report Sec. 4.8.2, 4.9).
     pub fn build(spec: &SceneSpec) -> Result<Scene> {
-        require_positive("width_m", spec.width_m)?;
-        let laminate = build_laminate(&spec.laminate, spec.plane)?;
-        let height = laminate.thickness_m();
-        check_mesh_size(spec, &laminate)?;
-        let mut mesh = Mesh::layered(
-            &laminate,
-            spec.width_m,
-            spec.element_size_x_m,
-            spec.element_size_y_m,
-            &[],
-            &[],
-        )?;
-        let crack_placement = spec
-            .crack
-            .as_ref()
-            .map(|c| place_crack(spec, c, &mesh, height))
-            .transpose()?;
+        let (laminate, mut mesh, crack_placement, region) = match &spec.gmsh {
+            None => layered_mesh(spec)?,
+            Some(g) => gmsh_mesh(spec, g)?,
+        };
         let crack = match &crack_placement {
             Some(p) if !p.tied => Some(p.insert(&mut mesh)?),
             _ => None,
         };
-        let fixed = if spec.fix_bottom_corners {
+        let conditions = edge_conditions(spec)?;
+        let mut fixed = if spec.fix_bottom_corners {
             bottom_corner_dofs(&mesh)
         } else {
             vec![]
         };
+        fixed.extend(held_dofs(&mesh, &conditions));
         if !(spec.transmitter.peak_pa.is_finite() && spec.transmitter.peak_pa > 0.0) {
             return Err(Error::invalid(
                 "transmitter.peak_pa",
@@ -405,22 +758,28 @@ impl Scene {
                 "must be finite and > 0 (the focusing signals are scaled to it)",
             ));
         }
-        let transmitter = transmitter_weights(&mesh, &spec.transmitter, height, spec.width_m)?;
-        let receivers = build_receivers(&mesh, &spec.receivers, height)?;
-        if receivers.is_empty() {
-            return Err(Error::invalid(
-                "receivers.x_m",
-                "[]",
-                "needs at least one receiver position",
-            ));
+        let transmitter = if spec.sources.is_empty() {
+            transmitter_weights(&mesh, &spec.transmitter, region)?
+        } else {
+            source_weights(&mesh, &spec.sources)?
+        };
+        let receivers = build_receivers(&mesh, &spec.receivers, region.y0 + region.height)?;
+        let contact = match &spec.gmsh {
+            None => spec
+                .crack
+                .as_ref()
+                .filter(|c| !c.tied)
+                .and_then(|c| c.contact),
+            Some(g) => g.crack_line.filter(|_| !g.tied).and(g.contact),
+        };
+        let absorbing = absorbing_edges(spec, &conditions, &mesh, region)?;
+        let mut model = Model::build(mesh, laminate.materials.clone(), &absorbing, fixed, crack)?;
+        // The stability estimate below is the untied model's: tying restricts it to the
+        // subspace u_l = u_r, which by the Rayleigh-quotient principle can only lower
+        // omega_max (as for the crack's tied companion), so the step stays stable.
+        if is_periodic(&conditions) {
+            model.tie_periodic()?;
         }
-        let contact = spec
-            .crack
-            .as_ref()
-            .filter(|c| !c.tied)
-            .and_then(|c| c.contact);
-        let absorbing = absorbing_edges(spec, height)?;
-        let model = Model::build(mesh, laminate.materials.clone(), &absorbing, fixed, crack)?;
         let stability = match crack_placement.as_ref().filter(|p| p.tied) {
             Some(p) => split_stability(&model, p, &absorbing)?,
             None => solve::stability::estimate(&model),
@@ -732,14 +1091,108 @@ fn crack_geometry(spec: &SceneSpec, c: &CrackSpec, height: f64) -> Result<(f64, 
     Ok((y, x0, x1))
 }
 
-/// The absorbing edges of the scene, with the viscous-spring distance resolved per side.
-fn absorbing_edges(spec: &SceneSpec, height: f64) -> Result<Vec<AbsorbingEdge>> {
-    let t = &spec.transmitter;
-    let source = [
-        spec.width_m,
-        height - 0.5 * (t.depth_top_m + t.depth_bottom_m),
-    ];
-    spec.absorbing
+/// The condition of every edge, in the order bottom, top, left, right: `edges` where it
+/// names one, else absorbing if `absorbing` lists the side, else free. Periodic must be
+/// given to the left and right edges together and to no other.
+fn edge_conditions(spec: &SceneSpec) -> Result<[(Side, EdgeCondition); 4]> {
+    let e = &spec.edges;
+    let conditions = [
+        (Side::Bottom, e.bottom),
+        (Side::Top, e.top),
+        (Side::Left, e.left),
+        (Side::Right, e.right),
+    ]
+    .map(|(side, given)| {
+        let absorbing = spec.absorbing.contains(&side);
+        let default = if absorbing {
+            EdgeCondition::Absorbing
+        } else {
+            EdgeCondition::Free
+        };
+        (side, given.unwrap_or(default))
+    });
+    let periodic = |side: Side| {
+        conditions
+            .iter()
+            .any(|&(s, c)| s == side && c == EdgeCondition::Periodic)
+    };
+    for side in [Side::Bottom, Side::Top] {
+        if periodic(side) {
+            return Err(Error::invalid(
+                format!("edges.{}", side.name()),
+                "periodic",
+                "only the left and right edges can be periodic (together)",
+            ));
+        }
+    }
+    if periodic(Side::Left) != periodic(Side::Right) {
+        let (set, other) = if periodic(Side::Left) {
+            ("left", "right")
+        } else {
+            ("right", "left")
+        };
+        return Err(Error::invalid(
+            format!("edges.{set}"),
+            "periodic",
+            format!("a periodic edge needs its partner: set edges.{other} periodic too"),
+        ));
+    }
+    Ok(conditions)
+}
+
+fn is_periodic(conditions: &[(Side, EdgeCondition); 4]) -> bool {
+    conditions
+        .iter()
+        .any(|&(_, c)| c == EdgeCondition::Periodic)
+}
+
+/// The DOFs held by fixed edges (both components) and rollers (the normal component).
+fn held_dofs(mesh: &Mesh, conditions: &[(Side, EdgeCondition); 4]) -> Vec<usize> {
+    let mut held = Vec::new();
+    for &(side, condition) in conditions {
+        let normal = match side {
+            Side::Bottom | Side::Top => 1,
+            Side::Left | Side::Right => 0,
+        };
+        let components: &[usize] = match condition {
+            EdgeCondition::Fixed => &[0, 1],
+            EdgeCondition::Roller => &[normal],
+            _ => continue,
+        };
+        for n in mesh.side_nodes(side) {
+            held.extend(components.iter().map(|c| 2 * n + c));
+        }
+    }
+    held
+}
+
+/// The absorbing edges of the scene, with the viscous-spring distance resolved per side:
+/// the sides of `absorbing` in its order, less those `edges` gives another condition, then
+/// the sides `edges` makes absorbing.
+fn absorbing_edges(
+    spec: &SceneSpec,
+    conditions: &[(Side, EdgeCondition); 4],
+    mesh: &Mesh,
+    region: Region,
+) -> Result<Vec<AbsorbingEdge>> {
+    let absorbs = |side: Side| {
+        conditions
+            .iter()
+            .any(|&(s, c)| s == side && c == EdgeCondition::Absorbing)
+    };
+    let mut sides: Vec<Side> = spec
+        .absorbing
+        .iter()
+        .copied()
+        .filter(|&s| absorbs(s))
+        .collect();
+    for &(side, _) in conditions {
+        if absorbs(side) && !sides.contains(&side) {
+            sides.push(side);
+        }
+    }
+    let source = source_centre(spec, mesh, region);
+    sides
         .iter()
         .map(|&side| {
             let spring_distance_m = match spec.absorber {
@@ -749,7 +1202,12 @@ fn absorbing_edges(spec: &SceneSpec, height: f64) -> Result<Vec<AbsorbingEdge>> 
                 } => Some(r),
                 Absorber::ViscousSpring {
                     source_distance_m: None,
-                } => Some(transmitter_distance(side, source, spec.width_m, height)?),
+                } => Some(transmitter_distance(
+                    side,
+                    source,
+                    region.width,
+                    region.height,
+                )?),
             };
             Ok(AbsorbingEdge {
                 side,
@@ -757,6 +1215,36 @@ fn absorbing_edges(spec: &SceneSpec, height: f64) -> Result<Vec<AbsorbingEdge>> 
             })
         })
         .collect()
+}
+
+/// The centre of the transmitter's segment, or of the first source (relative to the lower
+/// left corner of the region): where the viscous-spring distance R is measured from.
+fn source_centre(spec: &SceneSpec, mesh: &Mesh, region: Region) -> [f64; 2] {
+    let t = &spec.transmitter;
+    let Some(first) = spec.sources.first() else {
+        return [
+            region.width,
+            region.height - 0.5 * (t.depth_top_m + t.depth_bottom_m),
+        ];
+    };
+    let (x0, y0) = (region.x0, region.y0);
+    let p = match first {
+        SourceSpec::Point { x_m, y_m, .. } => [*x_m, *y_m],
+        SourceSpec::Traction {
+            edge, x_m, depth_m, ..
+        }
+        | SourceSpec::Normal {
+            edge, x_m, depth_m, ..
+        }
+        | SourceSpec::Shear {
+            edge, x_m, depth_m, ..
+        } => match edge_range(mesh, *edge, *x_m, *depth_m, "sources[0]") {
+            Ok((p, q)) => [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])],
+            // the source's own check reports the error
+            Err(_) => [x0, y0],
+        },
+    };
+    [p[0] - x0, p[1] - y0]
 }
 
 /// Distance from the transmitter's centre to the line of `side`; an error when the
@@ -794,9 +1282,9 @@ fn bottom_corner_dofs(mesh: &Mesh) -> Vec<usize> {
 fn transmitter_weights(
     mesh: &Mesh,
     t: &TransmitterSpec,
-    height: f64,
-    width: f64,
+    region: Region,
 ) -> Result<Vec<(usize, f64)>> {
+    let height = region.height;
     if !(t.depth_top_m >= 0.0 && t.depth_bottom_m > t.depth_top_m && t.depth_bottom_m <= height) {
         return Err(Error::invalid(
             "transmitter",
@@ -809,16 +1297,168 @@ fn transmitter_weights(
         t0_s: 0.0,
         samples: vec![1.0],
     };
+    let (right, top) = (region.x0 + region.width, region.y0 + height);
     Ok(traction_source(
         mesh,
-        [width, height - t.depth_top_m],
-        [width, height - t.depth_bottom_m],
+        [right, top - t.depth_top_m],
+        [right, top - t.depth_bottom_m],
         t.angle_deg,
         unit,
     )?
     .weights)
 }
 
+/// The end points of an edge source's range on the mesh: `x_m` along the top or bottom
+/// edge, `depth_m` below the top surface along the left or right edge, the whole edge
+/// without either.
+fn edge_range(
+    mesh: &Mesh,
+    edge: Side,
+    x_m: Option<[f64; 2]>,
+    depth_m: Option<[f64; 2]>,
+    field: &str,
+) -> Result<([f64; 2], [f64; 2])> {
+    let (x0, x1, y0, y1) = mesh.bounds();
+    let horizontal = matches!(edge, Side::Top | Side::Bottom);
+    let wrong = match (horizontal, x_m, depth_m) {
+        (true, _, Some(d)) => Some(("depth_m", d)),
+        (false, Some(x), _) => Some(("x_m", x)),
+        _ => None,
+    };
+    if let Some((name, v)) = wrong {
+        return Err(Error::invalid(
+            format!("{field}.{name}"),
+            format!("{v:?} on the {} edge", edge.name()),
+            "a range along the top or bottom edge is x_m, along the left or right edge depth_m \
+             (below the top surface)",
+        ));
+    }
+    let range = x_m.or(depth_m);
+    if let Some([a, b]) = range {
+        let (lo, hi) = if horizontal { (x0, x1) } else { (0.0, y1 - y0) };
+        if !(a.is_finite() && b.is_finite() && a >= lo && b > a && b <= hi) {
+            return Err(Error::invalid(
+                format!("{field}.{}", if horizontal { "x_m" } else { "depth_m" }),
+                format!("[{a}, {b}]"),
+                format!("needs {lo:e} <= from < to <= {hi:e} m"),
+            ));
+        }
+    }
+    Ok(match edge {
+        Side::Top | Side::Bottom => {
+            let y = if edge == Side::Top { y1 } else { y0 };
+            let [a, b] = range.unwrap_or([x0, x1]);
+            ([a, y], [b, y])
+        }
+        Side::Left | Side::Right => {
+            let x = if edge == Side::Right { x1 } else { x0 };
+            let [a, b] = range.unwrap_or([0.0, y1 - y0]);
+            ([x, y1 - a], [x, y1 - b])
+        }
+    })
+}
+
+/// Outward unit normal of a side.
+fn outward_normal(side: Side) -> [f64; 2] {
+    match side {
+        Side::Bottom => [0.0, -1.0],
+        Side::Top => [0.0, 1.0],
+        Side::Left => [-1.0, 0.0],
+        Side::Right => [1.0, 0.0],
+    }
+}
+
+/// Nodal weights of all `sources` per unit drive (Pa): the consistent nodal loads of their
+/// tractions ([`segment_shares`] times the traction direction) and their point forces.
+fn source_weights(mesh: &Mesh, sources: &[SourceSpec]) -> Result<Vec<(usize, f64)>> {
+    let mut weights = Vec::new();
+    for (i, source) in sources.iter().enumerate() {
+        let field = format!("sources[{i}]");
+        let (edge, x_m, depth_m, direction, scale) = match *source {
+            SourceSpec::Point {
+                x_m,
+                y_m,
+                angle_deg,
+                scale,
+            } => {
+                check_inside(mesh, &field, [x_m, y_m])?;
+                let node = mesh.nearest_node([x_m, y_m]);
+                let (s, c) = angle_deg.to_radians().sin_cos();
+                check_scale(&field, scale)?;
+                weights.extend([(2 * node, scale * c), (2 * node + 1, scale * s)]);
+                continue;
+            }
+            SourceSpec::Traction {
+                edge,
+                x_m,
+                depth_m,
+                angle_deg,
+                scale,
+            } => {
+                let (s, c) = angle_deg.to_radians().sin_cos();
+                (edge, x_m, depth_m, [c, s], scale)
+            }
+            SourceSpec::Normal {
+                edge,
+                x_m,
+                depth_m,
+                scale,
+            } => (edge, x_m, depth_m, outward_normal(edge), scale),
+            SourceSpec::Shear {
+                edge,
+                x_m,
+                depth_m,
+                scale,
+            } => {
+                let n = outward_normal(edge);
+                (edge, x_m, depth_m, [n[1].abs(), n[0].abs()], scale)
+            }
+        };
+        check_scale(&field, scale)?;
+        let (p, q) = edge_range(mesh, edge, x_m, depth_m, &field)?;
+        let nodes = mesh.nodes_on_segment(p, q);
+        if nodes.len() < 2 {
+            return Err(Error::invalid(
+                field,
+                format!("{p:?}..{q:?} m on the {} edge", edge.name()),
+                "covers fewer than two mesh nodes: widen the range",
+            ));
+        }
+        for (n, l) in segment_shares(mesh, &nodes) {
+            weights.extend([
+                (2 * n, scale * direction[0] * l),
+                (2 * n + 1, scale * direction[1] * l),
+            ]);
+        }
+    }
+    Ok(weights)
+}
+
+fn check_scale(field: &str, scale: f64) -> Result<()> {
+    if !scale.is_finite() || scale == 0.0 {
+        return Err(Error::invalid(
+            format!("{field}.scale"),
+            scale,
+            "must be finite and nonzero",
+        ));
+    }
+    Ok(())
+}
+
+fn check_inside(mesh: &Mesh, field: &str, p: [f64; 2]) -> Result<()> {
+    let (x0, x1, y0, y1) = mesh.bounds();
+    let tol = mesh.tolerance();
+    if !(p[0] >= x0 - tol && p[0] <= x1 + tol && p[1] >= y0 - tol && p[1] <= y1 + tol) {
+        return Err(Error::invalid(
+            field,
+            format!("x_m = {}, y_m = {}", p[0], p[1]),
+            format!("is outside the region x [{x0:e}, {x1:e}], y [{y0:e}, {y1:e}] m"),
+        ));
+    }
+    Ok(())
+}
+
+/// The receivers: the top-surface row of `x_m`, then those of `at`.
 fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Receiver>> {
     if r.component > 1 {
         return Err(Error::invalid(
@@ -827,21 +1467,75 @@ fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Rec
             "must be 0 (u_x) or 1 (u_y)",
         ));
     }
-    r.x_m
+    if r.x_m.is_empty() && r.at.is_empty() {
+        return Err(Error::invalid(
+            "receivers.x_m",
+            "[]",
+            "needs at least one receiver position (in x_m or at)",
+        ));
+    }
+    let half = 0.5 * r.aperture_m;
+    let face = |name: &str, p: [f64; 2], along: [f64; 2]| {
+        segment_receiver(
+            mesh,
+            name,
+            [p[0] - half * along[0], p[1] - half * along[1]],
+            [p[0] + half * along[0], p[1] + half * along[1]],
+            r.component,
+            r.quantity,
+        )
+    };
+    let mut receivers = r
+        .x_m
         .iter()
         .enumerate()
-        .map(|(i, &x)| {
-            let half = 0.5 * r.aperture_m;
-            segment_receiver(
-                mesh,
-                &format!("receiver {}", i + 1),
-                [x - half, height],
-                [x + half, height],
-                r.component,
-                r.quantity,
-            )
-        })
-        .collect()
+        .map(|(i, &x)| face(&format!("receiver {}", i + 1), [x, height], [1.0, 0.0]))
+        .collect::<Result<Vec<_>>>()?;
+    let (x0, x1, y0, y1) = mesh.bounds();
+    for (i, at) in r.at.iter().enumerate() {
+        let name = format!("receiver {}", receivers.len() + 1);
+        let field = format!("receivers.at[{i}]");
+        let receiver = match (at.edge, at.x_m, at.y_m, at.depth_m) {
+            (None, Some(x), Some(y), None) => {
+                check_inside(mesh, &field, [x, y])?;
+                point_receiver(mesh, &name, [x, y], r.component, r.quantity)?
+            }
+            (Some(edge), x_m, None, depth_m) => {
+                let horizontal = matches!(edge, Side::Top | Side::Bottom);
+                let (p, along) = match (horizontal, x_m, depth_m) {
+                    (true, Some(x), None) => {
+                        ([x, if edge == Side::Top { y1 } else { y0 }], [1.0, 0.0])
+                    }
+                    (false, None, Some(d)) => (
+                        [if edge == Side::Right { x1 } else { x0 }, y1 - d],
+                        [0.0, 1.0],
+                    ),
+                    _ => {
+                        return Err(Error::invalid(
+                            field,
+                            at.describe(),
+                            format!(
+                                "a receiver on the {} edge needs {} alone",
+                                edge.name(),
+                                if horizontal { "x_m" } else { "depth_m" }
+                            ),
+                        ))
+                    }
+                };
+                face(&name, p, along)?
+            }
+            _ => {
+                return Err(Error::invalid(
+                    field,
+                    at.describe(),
+                    "give #{x_m, y_m} for a point in the body, #{edge, x_m} on the top or \
+                     bottom edge, or #{edge, depth_m} on the left or right edge",
+                ))
+            }
+        };
+        receivers.push(receiver);
+    }
+    Ok(receivers)
 }
 
 /// Options of one transmission (a run of the scene), as scripts give them.

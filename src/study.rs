@@ -237,7 +237,7 @@ pub fn resolution_for_tolerance(
         ));
     }
     let pilot = |factor: f64| -> Result<(Vec<Signal>, f64)> {
-        let scene = Arc::new(Scene::build(&spec.coarsened(factor).uncracked())?);
+        let scene = Arc::new(Scene::build(&spec.coarsened(factor)?.uncracked())?);
         let r = Responder::new(scene, chirp.record_s + 1e-6)?;
         let c = crate::signal::chirp(
             chirp.f0_hz,
@@ -301,7 +301,7 @@ pub fn resolution_for_tolerance(
     }
     let predicted_error = error_at_finest * (factor / finest).powf(order);
     let predicted_run_time_s = time * (factor / finest).powi(-3);
-    let chosen = spec.coarsened(factor);
+    let chosen = spec.coarsened(factor)?;
     let choice = ResolutionChoice {
         tolerance,
         size_factor: factor,

@@ -350,7 +350,7 @@ impl Responder {
         let scene = self.scene()?;
         let scenes = [2.0, 4.0]
             .into_iter()
-            .map(|factor| Ok(Arc::new(Scene::build(&scene.spec.coarsened(factor))?)))
+            .map(|factor| Ok(Arc::new(Scene::build(&scene.spec.coarsened(factor)?)?)))
             .collect::<Result<Vec<_>>>()?;
         let work = |s: &Scene, dt: f64| s.model.dofs() as f64 / dt;
         let cost = scenes

@@ -50,6 +50,7 @@ fn bilinear_model(m: f64, k1: f64, k2: f64, eps: f64) -> Model {
                 slave: 1,
             }],
         }),
+        periodic: vec![],
     }
 }
 

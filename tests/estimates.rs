@@ -174,7 +174,10 @@ fn a_requested_tolerance_is_met_on_a_homogeneous_block() {
         .unwrap();
         r.respond(&c, chirp.record_s).unwrap().traces
     };
-    let (run, reference) = (response(&chosen), response(&chosen.coarsened(0.25)));
+    let (run, reference) = (
+        response(&chosen),
+        response(&chosen.coarsened(0.25).unwrap()),
+    );
     for (y, y_ref) in run.iter().zip(&reference) {
         let y = trnews::signal::resample(y, y_ref.dt_s).unwrap();
         let n = y.len().min(y_ref.len());

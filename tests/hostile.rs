@@ -120,6 +120,106 @@ fn issue_11_reproducers_are_errors_naming_the_field() {
     assert!(files(&dir.0).is_empty(), "{:?}", files(&dir.0));
 }
 
+/// Sources, receivers, edge conditions and Gmsh scenes: bad input is an error naming the
+/// field and the value written.
+#[test]
+fn open_scene_inputs_are_errors_naming_the_field() {
+    let dir = temp("open-scene");
+    let cases: Vec<(&str, &str)> = vec![
+        (
+            "#{sources: [#{kind: \"normal\", edge: \"left\", x_m: [0.0, 1e-3]}]}",
+            "sources[0].x_m",
+        ),
+        (
+            "#{sources: [#{kind: \"normal\", edge: \"top\", x_m: [2e-3, 1e-3]}]}",
+            "sources[0].x_m = [0.002, 0.001]",
+        ),
+        (
+            "#{sources: [#{kind: \"normal\", edge: \"top\", x_m: [1e-3, 1.01e-3]}]}",
+            "fewer than two mesh nodes",
+        ),
+        ("#{sources: [#{kind: \"laser\", edge: \"top\"}]}", "laser"),
+        (
+            "#{sources: [#{kind: \"shear\", edge: \"middle\"}]}",
+            "middle",
+        ),
+        (
+            "#{sources: [#{kind: \"traction\", edge: \"top\"}]}",
+            "angle_deg",
+        ),
+        (
+            "#{sources: [#{kind: \"point\", x_m: 1.0, y_m: 0.0, angle_deg: 0.0}]}",
+            "sources[0] = x_m = 1",
+        ),
+        (
+            "#{sources: [#{kind: \"normal\", edge: \"top\", scale: 0.0}]}",
+            "sources[0].scale = 0",
+        ),
+        (
+            "#{sources: [#{kind: \"normal\", edge: \"top\", force: 1.0}]}",
+            "force",
+        ),
+        ("#{receivers: #{at: [#{x_m: 1e-3}]}}", "receivers.at[0]"),
+        (
+            "#{receivers: #{at: [#{edge: \"left\", x_m: 1e-3}]}}",
+            "needs depth_m alone",
+        ),
+        (
+            "#{receivers: #{at: [#{x_m: 1e-3, y_m: 1.0}]}}",
+            "receivers.at[0] = x_m = 0.001, y_m = 1",
+        ),
+        ("#{receivers: #{at: [#{x_m: 1e-3, z_m: 1.0}]}}", "z_m"),
+        ("#{edges: #{left: \"periodic\"}}", "edges.left = periodic"),
+        ("#{edges: #{top: \"periodic\"}}", "edges.top = periodic"),
+        ("#{edges: #{left: \"sticky\"}}", "sticky"),
+        ("#{edges: #{front: \"free\"}}", "front"),
+        (
+            "#{gmsh: #{path: \"plate.msh\", materials: #{}}, crack: ()}",
+            "no data directory",
+        ),
+    ];
+    for (overrides, needle) in &cases {
+        let script = format!("scene::preset(\"smoke\", {overrides});");
+        let err = run(&dir.0, &script).unwrap_or_else(|| panic!("ran without error: {script}"));
+        assert!(err.starts_with("t.rhai:1:"), "no position: {err}");
+        assert!(
+            err.contains(needle),
+            "{script}\n  -> {err}\n  (expected {needle:?})"
+        );
+        assert!(!err.contains("internal error"), "{err}");
+    }
+}
+
+/// A Gmsh scene reads its file beneath the script's directory: a symlink that leads out of
+/// it is refused.
+#[cfg(unix)]
+#[test]
+fn gmsh_files_are_read_inside_the_script_directory_symlinks_included() {
+    let dir = temp("gmsh-link");
+    let outside = temp("gmsh-outside");
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts/gmsh_plate.msh");
+    std::fs::copy(&mesh, outside.0.join("plate.msh")).unwrap();
+    std::os::unix::fs::symlink(outside.0.join("plate.msh"), dir.0.join("link.msh")).unwrap();
+    std::fs::copy(&mesh, dir.0.join("plate.msh")).unwrap();
+    let script = |path: &str| {
+        format!(
+            "scene::build(#{{gmsh: #{{path: \"{path}\", materials: #{{\"1\": \"epoxy\", \"2\": \"epoxy\"}}}}, crack: (), receivers: #{{x_m: [1e-3]}}, sources: [#{{kind: \"normal\", edge: \"top\"}}]}});"
+        )
+    };
+    let out = temp("gmsh-out");
+    let run_file = |name: &str, text: &str| {
+        let file = dir.0.join(name);
+        std::fs::write(&file, text).unwrap();
+        host(&out.0, 20.0)
+            .run_file(&file)
+            .err()
+            .map(|e| e.to_string())
+    };
+    assert_eq!(run_file("inside.rhai", &script("plate.msh")), None);
+    let err = run_file("link.rhai", &script("link.msh")).expect("the symlink is refused");
+    assert!(err.contains("link.msh") && err.contains("inside"), "{err}");
+}
+
 /// The operation limit 0 is refused; the time limit stops a script loop and a simulation.
 #[test]
 fn budgets_stop_runaway_scripts() {
@@ -493,6 +593,11 @@ const SCENE_FIELDS: &[&str] = &[
     "laminate.min_epoxy_m",
     "laminate.pairs",
     "absorber.kind",
+    "sources",
+    "edges",
+    "edges.left",
+    "receivers.at",
+    "gmsh",
 ];
 const RUN_FIELDS: &[&str] = &[
     "duration_s",

@@ -68,6 +68,11 @@ pub struct Model {
     pub fixed_dofs: Vec<usize>,
     /// The crack, if the scene has one.
     pub crack: Option<Crack>,
+    /// Periodic ties as (left DOF, right DOF): u(0, y) = u(width, y) (empty unless
+    /// [`Model::tie_periodic`] was called). The integrator keeps each pair equal by
+    /// master/slave elimination: the tied DOF has the mass m_l + m_r and the force f_l + f_r
+    /// (the system T^T M T, T^T K T of the constraint u_r = u_l).
+    pub periodic: Vec<(usize, usize)>,
 }
 
 impl Model {
@@ -122,7 +127,62 @@ impl Model {
             dashpots,
             fixed_dofs,
             crack,
+            periodic: Vec::new(),
         })
+    }
+
+    /// Ties the left and right node columns: every node of the left side to the node of the
+    /// right side at the same height (both DOFs). A DOF held on either side is held on both.
+    /// The columns must match node for node (the layered meshes' columns do: they share the
+    /// row lines); otherwise an error names the first height without a partner.
+    pub fn tie_periodic(&mut self) -> Result<()> {
+        let mesh = &self.mesh;
+        let (left, right) = (mesh.side_nodes(Side::Left), mesh.side_nodes(Side::Right));
+        let tol = mesh.tolerance();
+        if let Some((&l, &r)) = left
+            .iter()
+            .zip(&right)
+            .find(|&(&l, &r)| (mesh.nodes[l][1] - mesh.nodes[r][1]).abs() > tol)
+        {
+            return Err(Error::invalid(
+                "edges.left, edges.right",
+                "periodic",
+                format!(
+                    "the left and right node columns do not match: y = {:e} m on the left \
+                     against {:e} m on the right",
+                    mesh.nodes[l][1], mesh.nodes[r][1]
+                ),
+            ));
+        }
+        if left.len() != right.len() {
+            return Err(Error::invalid(
+                "edges.left, edges.right",
+                "periodic",
+                format!(
+                    "the left edge has {} nodes, the right edge {}: the columns must match",
+                    left.len(),
+                    right.len()
+                ),
+            ));
+        }
+        let pairs: Vec<(usize, usize)> = left
+            .iter()
+            .zip(&right)
+            .flat_map(|(&l, &r)| [(2 * l, 2 * r), (2 * l + 1, 2 * r + 1)])
+            .collect();
+        let held: Vec<usize> = pairs
+            .iter()
+            .filter(|&&(l, r)| {
+                self.fixed_dofs.binary_search(&l).is_ok()
+                    || self.fixed_dofs.binary_search(&r).is_ok()
+            })
+            .flat_map(|&(l, r)| [l, r])
+            .collect();
+        self.fixed_dofs.extend(held);
+        self.fixed_dofs.sort_unstable();
+        self.fixed_dofs.dedup();
+        self.periodic = pairs;
+        Ok(())
     }
 
     /// Number of DOFs.

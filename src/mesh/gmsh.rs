@@ -95,6 +95,65 @@ pub fn read_msh(bytes: &[u8], physical_material: &HashMap<i32, usize>) -> Result
     Ok(mesh)
 }
 
+/// The points of the linear line elements (`Lin2`) of the curves in physical group `group`
+/// of a Gmsh MSH 4.1 file (each node once, in file order): a crack or an interface drawn
+/// as a physical line. An error when the group has no line element.
+pub fn read_physical_line(bytes: &[u8], group: i32) -> Result<Vec<[f64; 2]>> {
+    let msh = mshio::parse_msh_bytes(bytes)
+        .map_err(|e| Error::Mesh(format!("cannot read the MSH file: {e}")))?;
+    let curves: Vec<i32> = msh
+        .data
+        .entities
+        .map(|e| {
+            e.curves
+                .into_iter()
+                .filter(|c| c.physical_tags.contains(&group))
+                .map(|c| c.tag)
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut coordinates = HashMap::new();
+    if let Some(nodes) = &msh.data.nodes {
+        let mut next_tag = nodes.min_node_tag;
+        for block in &nodes.node_blocks {
+            let mut tags: Vec<u64> = (next_tag..next_tag + block.nodes.len() as u64).collect();
+            if let Some(map) = &block.node_tags {
+                map.iter().for_each(|(&tag, &i)| tags[i] = tag);
+            }
+            next_tag += block.nodes.len() as u64;
+            for (tag, node) in tags.into_iter().zip(&block.nodes) {
+                coordinates.insert(tag, [node.x, node.y]);
+            }
+        }
+    }
+    let mut seen = std::collections::HashSet::new();
+    let mut points = Vec::new();
+    for block in msh
+        .data
+        .elements
+        .iter()
+        .flat_map(|e| &e.element_blocks)
+        .filter(|b| b.element_type == mshio::ElementType::Lin2 && curves.contains(&b.entity_tag))
+    {
+        for tag in block.elements.iter().flat_map(|e| e.nodes.iter().take(2)) {
+            let p = coordinates.get(tag).ok_or_else(|| {
+                Error::Mesh(format!(
+                    "a line element of physical group {group} refers to node {tag}, which is not in $Nodes"
+                ))
+            })?;
+            if seen.insert(*tag) {
+                points.push(*p);
+            }
+        }
+    }
+    if points.is_empty() {
+        return Err(Error::Mesh(format!(
+            "physical group {group} has no line elements (Lin2) in the MSH file"
+        )));
+    }
+    Ok(points)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -114,6 +173,21 @@ mod tests {
             .triangles
             .iter()
             .all(|&t| (mesh.twice_area(t) - 1.0).abs() < 1e-15));
+    }
+
+    #[test]
+    fn physical_line_gives_its_nodes_once() {
+        // the square's line element 1 -> 2 lies on curve 1: put that curve in physical group 5
+        let with_line = SQUARE.replace(
+            "$Entities\n0 0 2 0\n",
+            "$Entities\n0 1 2 0\n1 0 0 0 1 0 0 1 5 0\n",
+        );
+        let line = read_physical_line(with_line.as_bytes(), 5).unwrap();
+        assert_eq!(line, vec![[0.0, 0.0], [1.0, 0.0]]);
+        let e = read_physical_line(with_line.as_bytes(), 6)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("physical group 6"), "{e}");
     }
 
     #[test]

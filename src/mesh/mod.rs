@@ -21,6 +21,18 @@ pub enum Side {
     Right,
 }
 
+impl Side {
+    /// The side's name as scripts write it (`bottom`, `top`, `left`, `right`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Side::Bottom => "bottom",
+            Side::Top => "top",
+            Side::Left => "left",
+            Side::Right => "right",
+        }
+    }
+}
+
 /// The rectilinear grid behind a structured mesh: node (i, j) has index `j * x.len() + i`.
 #[derive(Clone, Debug, Serialize)]
 pub struct Grid {
@@ -359,6 +371,42 @@ impl Mesh {
             .collect();
         v.sort_by(|a, b| a.0.total_cmp(&b.0));
         v.into_iter().map(|(_, i)| i).collect()
+    }
+
+    /// The element that holds `p` and the barycentric coordinates of `p` in it (they sum to
+    /// 1; each is >= 0 inside). Of the elements that could hold it, the one where `p` lies
+    /// deepest inside (the largest smallest coordinate), so a point on an edge or a node
+    /// has one answer; coordinates within 1e-12 of 0 are set to 0 and the rest renormalised,
+    /// so a point on a node gets exactly (1, 0, 0). `None` outside the mesh (beyond the
+    /// mesh tolerance).
+    pub fn locate(&self, p: [f64; 2]) -> Option<(usize, [f64; 3])> {
+        let mut best: Option<(usize, [f64; 3], f64)> = None;
+        for (e, &t) in self.triangles.iter().enumerate() {
+            let [a, b, c] = t.map(|n| self.nodes[n]);
+            let twice = self.twice_area(t);
+            let lambda = [
+                ((b[0] - p[0]) * (c[1] - p[1]) - (c[0] - p[0]) * (b[1] - p[1])) / twice,
+                ((c[0] - p[0]) * (a[1] - p[1]) - (a[0] - p[0]) * (c[1] - p[1])) / twice,
+                ((a[0] - p[0]) * (b[1] - p[1]) - (b[0] - p[0]) * (a[1] - p[1])) / twice,
+            ];
+            let depth = lambda.iter().copied().fold(f64::INFINITY, f64::min);
+            if best.as_ref().is_none_or(|&(_, _, d)| depth > d) {
+                best = Some((e, lambda, depth));
+            }
+        }
+        let (e, mut lambda, depth) = best?;
+        // outside every element by more than the tolerance (relative to the element size)
+        let size = self.twice_area(self.triangles[e]).sqrt();
+        if depth < -self.tolerance() / size.max(f64::MIN_POSITIVE) {
+            return None;
+        }
+        for l in &mut lambda {
+            if l.abs() < 1e-12 {
+                *l = 0.0;
+            }
+        }
+        let sum: f64 = lambda.iter().sum();
+        Some((e, lambda.map(|l| l / sum)))
     }
 
     /// The grid row line nearest to `y` (structured meshes), for snapping a crack onto the mesh.

@@ -224,6 +224,19 @@ impl HostContext {
             })
     }
 
+    /// Reads an input file a script names (a Gmsh mesh) beneath the data root, like
+    /// `io::read_*` (see [`crate::input::InputRoot::read`]); a file above a quarter of the
+    /// memory limit is refused before it is read (a mesh takes a few times its file).
+    pub fn read_input(&self, path: &str) -> Result<Vec<u8>, String> {
+        self.data_root()?
+            .read(
+                path,
+                crate::budget::memory_limit() / 4,
+                "a quarter of --max-memory",
+            )
+            .map_err(|e| e.to_string())
+    }
+
     /// Prints a script message to stderr, prefixed with the script name, without
     /// tearing an active progress display.
     pub fn print(&self, text: &str) {

@@ -27,7 +27,13 @@ pub fn module() -> Module {
 
 /// Builds a scene from an override map over `base`.
 fn build(ctx: &NativeCallContext, overrides: Map, base: SceneSpec) -> ScriptResult<SceneRef> {
-    let spec: SceneSpec = overlay(ctx, overrides, &base, "scene")?;
+    let mut spec: SceneSpec = overlay(ctx, overrides, &base, "scene")?;
+    if let Some(g) = spec.gmsh.as_mut() {
+        let bytes = crate::script::HostContext::of(ctx)?
+            .read_input(&g.path)
+            .map_err(|e| error(ctx, format!("scene.gmsh.path: {e}")))?;
+        g.bytes = Some(Arc::new(bytes));
+    }
     Ok(Arc::new(Scene::build(&spec).at(ctx)?))
 }
 

@@ -4,8 +4,10 @@
 //!
 //! The step is split so that it costs O(DOFs) only once: a fused parallel kernel computes
 //! the undamped, unforced update u_{n+1} = 2 u_n - u_{n-1} - (dt^2/m)(K u_n) for every DOF,
-//! then sparse corrections touch only what the scene has: source DOFs, dashpot DOFs, crack
-//! pairs. Fixed DOFs have dt^2/m = 0 and so never move. Nothing is allocated per step.
+//! then sparse corrections touch only what the scene has: source DOFs, periodic ties (each
+//! tied pair takes the mass-weighted mean of its two updates, the update of one DOF of mass
+//! m_l + m_r under the force f_l + f_r), dashpot DOFs, crack pairs. Fixed DOFs have
+//! dt^2/m = 0 and so never move. Nothing is allocated per step.
 //! The kernel is [`StiffnessOperator::explicit_update`]: matrix-free stencils on structured
 //! meshes, the assembled K elsewhere.
 
@@ -32,6 +34,8 @@ struct Coefficients {
     dashpots: Vec<(usize, f64, f64)>,
     /// Compliance of the corrected update, dt^2 / (m (1 + r)).
     compliance: Vec<f64>,
+    /// (left DOF, right DOF, m_l / (m_l + m_r)) for every periodic tie.
+    ties: Vec<(usize, usize, f64)>,
 }
 
 impl Coefficients {
@@ -40,11 +44,20 @@ impl Coefficients {
         for &d in &model.fixed_dofs {
             a[d] = 0.0;
         }
-        let dashpots: Vec<(usize, f64, f64)> = model
+        let mut dashpots: Vec<(usize, f64, f64)> = model
             .dashpots
             .iter()
             .map(|&(d, c)| (d, c, c * dt / (2.0 * model.lumped_mass[d])))
             .collect();
+        let m = &model.lumped_mass;
+        let ties: Vec<(usize, usize, f64)> = model
+            .periodic
+            .iter()
+            .map(|&(l, r)| (l, r, m[l] / (m[l] + m[r])))
+            .collect();
+        if !ties.is_empty() {
+            dashpots = tied_dashpots(&dashpots, &ties, m, dt);
+        }
         let mut compliance = a.clone();
         for &(d, _, r) in &dashpots {
             compliance[d] /= 1.0 + r;
@@ -53,8 +66,32 @@ impl Coefficients {
             a,
             dashpots,
             compliance,
+            ties,
         }
     }
+}
+
+/// The dashpots of a periodic model: a tied DOF pair moves as one DOF of mass m_l + m_r and
+/// damping c_l + c_r, so both members get r = (c_l + c_r) dt / (2 (m_l + m_r)) (each keeps
+/// its own c for the dissipated energy).
+fn tied_dashpots(
+    dashpots: &[(usize, f64, f64)],
+    ties: &[(usize, usize, f64)],
+    m: &[f64],
+    dt: f64,
+) -> Vec<(usize, f64, f64)> {
+    let mut by_dof: std::collections::BTreeMap<usize, (f64, f64)> =
+        dashpots.iter().map(|&(d, c, r)| (d, (c, r))).collect();
+    for &(l, r, _) in ties {
+        let c = |d: usize| by_dof.get(&d).map_or(0.0, |e| e.0);
+        let (cl, cr) = (c(l), c(r));
+        if cl + cr > 0.0 {
+            let shared = (cl + cr) * dt / (2.0 * (m[l] + m[r]));
+            by_dof.insert(l, (cl, shared));
+            by_dof.insert(r, (cr, shared));
+        }
+    }
+    by_dof.into_iter().map(|(d, (c, r))| (d, c, r)).collect()
 }
 
 /// DOFs per parallel task of the energy sums.
@@ -221,6 +258,11 @@ pub(super) fn run(
                     u_next[d] += coef.a[d] * w * f;
                 }
             }
+        }
+        for &(l, r, w) in &coef.ties {
+            let tied = w * u_next[l] + (1.0 - w) * u_next[r];
+            u_next[l] = tied;
+            u_next[r] = tied;
         }
         for &(d, c, r) in &coef.dashpots {
             let q = u_next[d] - 2.0 * u[d] + u_prev[d];

@@ -253,6 +253,13 @@ pub fn run(
     match config.integrator {
         Integrator::Explicit => explicit::run(model, sources, receivers, config),
         Integrator::Newmark { consistent_mass } => {
+            if !model.periodic.is_empty() {
+                return Err(Error::invalid(
+                    "integrator",
+                    "newmark",
+                    "periodic edges are implemented for the explicit integrator only",
+                ));
+            }
             if config.contact.is_some() && model.crack.is_some() {
                 return Err(Error::invalid(
                     "integrator",
@@ -456,6 +463,38 @@ pub fn segment_receiver(
         weights: shares
             .into_iter()
             .map(|(n, w)| (2 * n + component, w / total))
+            .collect(),
+        quantity,
+    })
+}
+
+/// A receiver of component `component` (0 = x, 1 = y) at the point `p` anywhere in the
+/// mesh: the displacement interpolated with the linear shape functions of the T3 element
+/// that holds `p`, u(p) = sum_i lambda_i u_i with the barycentric coordinates lambda_i
+/// ([`Mesh::locate`]). A point on a node records that node alone; on an element edge, the
+/// edge's two nodes.
+pub fn point_receiver(
+    mesh: &Mesh,
+    name: &str,
+    p: [f64; 2],
+    component: usize,
+    quantity: Quantity,
+) -> Result<Receiver> {
+    let (element, lambda) = mesh.locate(p).ok_or_else(|| {
+        Error::invalid(
+            format!("receiver '{name}'"),
+            format!("({}, {}) m", p[0], p[1]),
+            "lies in no element of the mesh",
+        )
+    })?;
+    let t = mesh.triangles[element];
+    Ok(Receiver {
+        name: name.into(),
+        weights: t
+            .iter()
+            .zip(lambda)
+            .filter(|&(_, l)| l != 0.0)
+            .map(|(&n, l)| (2 * n + component, l))
             .collect(),
         quantity,
     })
