@@ -159,6 +159,10 @@ fn open_scene_inputs_are_errors_naming_the_field() {
             "#{sources: [#{kind: \"normal\", edge: \"top\", force: 1.0}]}",
             "force",
         ),
+        (
+            "#{transmitter: #{angle_deg: 90.0}, sources: [#{kind: \"normal\", edge: \"top\"}]}",
+            "transmitter.angle_deg = 90",
+        ),
         ("#{receivers: #{at: [#{x_m: 1e-3}]}}", "receivers.at[0]"),
         (
             "#{receivers: #{at: [#{edge: \"left\", x_m: 1e-3}]}}",
@@ -217,7 +221,7 @@ fn gmsh_files_are_read_inside_the_script_directory_symlinks_included() {
     };
     assert_eq!(run_file("inside.rhai", &script("plate.msh")), None);
     let err = run_file("link.rhai", &script("link.msh")).expect("the symlink is refused");
-    assert!(err.contains("link.msh") && err.contains("inside"), "{err}");
+    assert!(err.contains("link.msh") && err.contains("outside"), "{err}");
 }
 
 /// The operation limit 0 is refused; the time limit stops a script loop and a simulation.

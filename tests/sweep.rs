@@ -103,8 +103,8 @@ fn point_files(out: &Path, kind: &str) -> BTreeMap<PathBuf, u64> {
         .collect()
 }
 
-/// The "computed here" count of the summary line of the sweep named `which` ("convolved"
-/// or "simulated").
+/// The "computed here" count of the summary line of the sweep named `which`
+/// ("convolved or recorded" or "simulated").
 fn computed(stderr: &str, which: &str) -> usize {
     let line = stderr
         .lines()
@@ -150,7 +150,7 @@ fn a_killed_sweep_resumes_computing_only_its_unfinished_points() {
     );
 
     let stderr = run(&out, &[]);
-    assert_eq!(computed(&stderr, "convolved"), 0, "{stderr}");
+    assert_eq!(computed(&stderr, "convolved or recorded"), 0, "{stderr}");
     assert_eq!(
         computed(&stderr, "simulated"),
         6 - simulated_before,
@@ -208,7 +208,7 @@ fn three_shards_and_a_merge_give_the_bytes_of_one_run() {
     }
     assert_eq!(simulated, 6);
     let stderr = run(&out, &["--merge"]);
-    assert_eq!(computed(&stderr, "convolved"), 0, "{stderr}");
+    assert_eq!(computed(&stderr, "convolved or recorded"), 0, "{stderr}");
     assert_eq!(computed(&stderr, "simulated"), 0, "{stderr}");
     assert_same_outputs(&out);
     let _ = std::fs::remove_dir_all(&out);
@@ -262,7 +262,7 @@ fn corrupt_and_truncated_point_files_are_recomputed_never_merged() {
         stderr.contains("truncated") || stderr.contains("checksum mismatch"),
         "{stderr}"
     );
-    let total = computed(&stderr, "convolved") + computed(&stderr, "simulated");
+    let total = computed(&stderr, "convolved or recorded") + computed(&stderr, "simulated");
     assert_eq!(total, 2, "{stderr}");
     assert_same_outputs(&out);
     let _ = std::fs::remove_dir_all(&out);

@@ -27,6 +27,7 @@ pub fn module() -> Module {
 
 /// Builds a scene from an override map over `base`.
 fn build(ctx: &NativeCallContext, overrides: Map, base: SceneSpec) -> ScriptResult<SceneRef> {
+    refuse_unused_segment(ctx, &overrides)?;
     let mut spec: SceneSpec = overlay(ctx, overrides, &base, "scene")?;
     if let Some(g) = spec.gmsh.as_mut() {
         let bytes = crate::script::HostContext::of(ctx)?
@@ -35,6 +36,32 @@ fn build(ctx: &NativeCallContext, overrides: Map, base: SceneSpec) -> ScriptResu
         g.bytes = Some(Arc::new(bytes));
     }
     Ok(Arc::new(Scene::build(&spec).at(ctx)?))
+}
+
+/// `sources` replace the transmitter's segment: a segment or angle written next to them
+/// would be ignored silently, so it is an error naming it.
+fn refuse_unused_segment(ctx: &NativeCallContext, overrides: &Map) -> ScriptResult<()> {
+    let Some(transmitter) = overrides
+        .get("transmitter")
+        .and_then(|t| t.read_lock::<Map>())
+    else {
+        return Ok(());
+    };
+    if !overrides.contains_key("sources") {
+        return Ok(());
+    }
+    for field in ["depth_top_m", "depth_bottom_m", "angle_deg"] {
+        if let Some(value) = transmitter.get(field) {
+            return Err(error(
+                ctx,
+                format!(
+                    "transmitter.{field} = {value} is not used when `sources` are given (they \
+                     replace the transmitter's segment; only transmitter.peak_pa applies)"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A 1-based index into `len` items, named `what` in errors.
