@@ -16,6 +16,7 @@ pub mod gll;
 
 use crate::error::{Error, Result};
 use crate::material::Material;
+use crate::mesh::Side;
 use gll::Gll;
 use rayon::prelude::*;
 
@@ -329,6 +330,67 @@ impl SemModel {
                 f[1] += fy[a];
             }
         }
+    }
+
+    /// GLL quadrature of a side: for every element edge on it, each of its nodes with the
+    /// weight w_a (h / 2) of its GLL point and the element row (or column) it belongs to,
+    /// so that sum weight f(node) = integral of f along the side for polynomials of degree
+    /// up to 2N - 1 per element.
+    pub fn side_quadrature(&self, side: Side) -> Vec<(usize, f64, usize)> {
+        let (nx, ny) = (self.nx(), self.y_nodes_m.len());
+        let mut out = Vec::new();
+        match side {
+            Side::Bottom | Side::Top => {
+                let (j, row) = match side {
+                    Side::Bottom => (0, 0),
+                    _ => (ny - 1, self.gll_y.len() - 1),
+                };
+                let px = self.gll_x.order();
+                for c in 0..self.columns_m.len() - 1 {
+                    let jx = 0.5 * (self.columns_m[c + 1] - self.columns_m[c]);
+                    for (a, w) in self.gll_x.weights.iter().enumerate() {
+                        out.push((self.node(c * px + a, j), w * jx, row));
+                    }
+                }
+            }
+            Side::Left | Side::Right => {
+                let i = if side == Side::Left { 0 } else { nx - 1 };
+                for (r, g) in self.gll_y.iter().enumerate() {
+                    let jy = 0.5 * (self.rows_m[r + 1] - self.rows_m[r]);
+                    for (b, w) in g.weights.iter().enumerate() {
+                        out.push((self.node(i, self.first_line[r] + b), w * jy, r));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Lysmer-Kuhlemeyer dashpots of the `sides` (report Sec. 4.6), with GLL
+    /// edge weights: per edge node, rho V_p times its weight on the normal DOF and rho V_s on
+    /// the tangential one, V_p along the side's normal, from the material of the element it
+    /// belongs to (a node shared by two element rows gets both halves). Sorted by DOF.
+    pub fn dashpots(&self, sides: &[Side]) -> Vec<(usize, f64)> {
+        let mut c = std::collections::BTreeMap::<usize, f64>::new();
+        for &side in sides {
+            let normal = match side {
+                Side::Bottom | Side::Top => 1,
+                Side::Left | Side::Right => 0,
+            };
+            for (node, weight, row) in self.side_quadrature(side) {
+                let mat = &self.materials[self.row_material[row]];
+                let speeds = mat.wave_speeds();
+                let vp = if normal == 0 {
+                    speeds.p_x_m_s
+                } else {
+                    speeds.p_y_m_s
+                };
+                let rho = mat.density_kg_m3;
+                *c.entry(2 * node + normal).or_default() += rho * vp * weight;
+                *c.entry(2 * node + 1 - normal).or_default() += rho * speeds.s_m_s * weight;
+            }
+        }
+        c.into_iter().collect()
     }
 
     /// Largest eigenvalue of M^-1 K over the `free` DOFs (Lanczos, as for the T3 model), and
