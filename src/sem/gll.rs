@@ -80,10 +80,16 @@ impl Gll {
         self.points.len() - 1
     }
 
-    /// Values l_j(x) of the Lagrange polynomials at `x` in [-1, 1] (barycentric form).
+    /// Values l_j(x) of the Lagrange polynomials at `x` in [-1, 1] (barycentric form). An `x`
+    /// within a few ulp of a GLL point (the round-off of mapping a node's coordinate onto the
+    /// reference element) is that point: l_k = 1, the others 0.
     pub fn lagrange_at(&self, x: f64) -> Vec<f64> {
         let n = self.order();
-        if let Some(k) = self.points.iter().position(|&p| p == x) {
+        if let Some(k) = self
+            .points
+            .iter()
+            .position(|&p| (p - x).abs() <= 8.0 * f64::EPSILON)
+        {
             let mut l = vec![0.0; n + 1];
             l[k] = 1.0;
             return l;

@@ -366,6 +366,31 @@ impl SemModel {
         out
     }
 
+    /// Interpolation weights of the displacement at `(x_m, y_m)`: the element holding the
+    /// point (the lower one on a shared line), its local coordinates, and the tensor products
+    /// l_a(xi) l_b(eta) of the GLL Lagrange polynomials at its nodes, zeros dropped. A point on
+    /// a node gets that node alone with weight exactly 1. `None` outside the rectangle.
+    pub fn point_weights(&self, x_m: f64, y_m: f64) -> Option<Vec<(usize, f64)>> {
+        let c = containing(&self.columns_m, x_m)?;
+        let r = containing(&self.rows_m, y_m)?;
+        let local = |lines: &[f64], k: usize, v: f64| {
+            (2.0 * v - lines[k] - lines[k + 1]) / (lines[k + 1] - lines[k])
+        };
+        let lx = self.gll_x.lagrange_at(local(&self.columns_m, c, x_m));
+        let ly = self.gll_y[r].lagrange_at(local(&self.rows_m, r, y_m));
+        let px = self.gll_x.order();
+        let mut weights = Vec::new();
+        for (b, wy) in ly.iter().enumerate() {
+            for (a, wx) in lx.iter().enumerate() {
+                let w = wx * wy;
+                if w != 0.0 {
+                    weights.push((self.node(c * px + a, self.first_line[r] + b), w));
+                }
+            }
+        }
+        Some(weights)
+    }
+
     /// Lysmer-Kuhlemeyer dashpots of the `sides` (report Sec. 4.6), with GLL
     /// edge weights: per edge node, rho V_p times its weight on the normal DOF and rho V_s on
     /// the tangential one, V_p along the side's normal, from the material of the element it
@@ -416,6 +441,21 @@ fn flat_derivative(g: &Gll) -> (Vec<f64>, Vec<f64>) {
     let d: Vec<f64> = g.derivative.iter().flatten().copied().collect();
     let t = (0..n * n).map(|k| d[(k % n) * n + k / n]).collect();
     (d, t)
+}
+
+/// Index of the interval of ascending `lines` holding `v` (the lower one on a shared line),
+/// or `None` outside [first, last].
+fn containing(lines: &[f64], v: f64) -> Option<usize> {
+    let (first, last) = (lines[0], *lines.last()?);
+    if !(first..=last).contains(&v) {
+        return None;
+    }
+    Some(
+        lines
+            .partition_point(|&l| l < v)
+            .saturating_sub(1)
+            .min(lines.len() - 2),
+    )
 }
 
 /// Node coordinates along one axis: each element's GLL points mapped onto it, shared end

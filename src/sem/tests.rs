@@ -361,3 +361,31 @@ fn lysmer_kuhlemeyer_bottom_absorbs_a_normal_p_pulse() {
         "fixed bottom: {reflected:e}"
     );
 }
+
+/// Point weights: a point on a node is that node alone (weight exactly 1); anywhere else the
+/// weights reproduce a field of degree 4 along x and 5 across its row exactly (orders 6 and
+/// 5 there), sum to 1, and points outside are refused.
+#[test]
+fn point_weights_interpolate_polynomials_exactly() {
+    let m = layered();
+    let (i, j) = (7, 3);
+    let w = m
+        .point_weights(m.x_nodes_m[i], m.y_nodes_m[j])
+        .expect("inside");
+    assert_eq!(w, vec![(m.node(i, j), 1.0)]);
+    let f = |x: f64, y: f64| (x * 1e3).powi(4) - 2.0 * (y * 1e3).powi(5) + x * y * 1e6;
+    let u = field(&m, |x, y| [f(x, y), 0.0]);
+    for (x, y) in [(0.31e-3, 0.17e-3), (1.234e-3, 0.44e-3), (1.9e-3, 0.02e-3)] {
+        let w = m.point_weights(x, y).expect("inside");
+        let value: f64 = w.iter().map(|&(n, w)| w * u[2 * n]).sum();
+        let total: f64 = w.iter().map(|p| p.1).sum();
+        assert!(
+            (value - f(x, y)).abs() < 1e-12 * f(x, y).abs().max(1.0),
+            "({x}, {y}): {value} vs {}",
+            f(x, y)
+        );
+        assert!((total - 1.0).abs() < 1e-13, "{total}");
+    }
+    assert!(m.point_weights(2.1e-3, 0.5e-3).is_none());
+    assert!(m.point_weights(1e-3, -1e-9).is_none());
+}
