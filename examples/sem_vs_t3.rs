@@ -11,6 +11,7 @@
 
 use std::f64::consts::PI;
 use std::time::Instant;
+use trnews::exact::RollerMode;
 use trnews::fem::{Model, StiffnessOperator};
 use trnews::laminate::Laminate;
 use trnews::material::{Material, Orthotropic, Plane};
@@ -20,42 +21,6 @@ use trnews::sem::SemModel;
 const WIDTH: f64 = 8e-3;
 const HEIGHT: f64 = 2e-3;
 const PERIODS: f64 = 5.0;
-
-/// The exact roller mode (see the module comment): shape and angular frequency.
-struct Mode {
-    kx: f64,
-    ky: f64,
-    a: f64,
-    b: f64,
-    omega: f64,
-}
-
-impl Mode {
-    fn new(mat: &Material) -> Mode {
-        let (kx, ky) = (2.0 * 2.0 * PI / WIDTH, PI / HEIGHT);
-        let c = &mat.stiffness_pa;
-        let k11 = c[0][0] * kx * kx + c[2][2] * ky * ky;
-        let k12 = (c[0][1] + c[2][2]) * kx * ky;
-        let k22 = c[1][1] * ky * ky + c[2][2] * kx * kx;
-        let lambda = 0.5 * (k11 + k22) - (0.25 * (k11 - k22).powi(2) + k12 * k12).sqrt();
-        let (a, b) = (k12, lambda - k11);
-        let n = (a * a + b * b).sqrt();
-        Mode {
-            kx,
-            ky,
-            a: a / n,
-            b: b / n,
-            omega: (lambda / mat.density_kg_m3).sqrt(),
-        }
-    }
-
-    fn at(&self, [x, y]: [f64; 2]) -> [f64; 2] {
-        [
-            self.a * (self.kx * x).sin() * (self.ky * y).cos(),
-            self.b * (self.kx * x).cos() * (self.ky * y).sin(),
-        ]
-    }
-}
 
 /// One run: DOFs, steps, relative error, seconds in the time loop.
 struct Outcome {
@@ -72,10 +37,10 @@ fn integrate(
     mass: &[f64],
     free: &[bool],
     dt: f64,
-    mode: &Mode,
+    mode: &RollerMode,
     mut stiffness: impl FnMut(&[f64], &mut [f64]),
 ) -> Outcome {
-    let shape: Vec<f64> = nodes.iter().flat_map(|&p| mode.at(p)).collect();
+    let shape: Vec<f64> = nodes.iter().flat_map(|&[x, y]| mode.at(x, y)).collect();
     let steps = (PERIODS * 2.0 * PI / mode.omega / dt).ceil() as usize;
     let dt = PERIODS * 2.0 * PI / mode.omega / steps as f64;
     let mut u_prev: Vec<f64> = shape.iter().map(|s| s * (mode.omega * dt).cos()).collect();
@@ -123,7 +88,7 @@ fn rollers(nodes: &[[f64; 2]]) -> Vec<bool> {
         .collect()
 }
 
-fn t3(mat: &Material, mode: &Mode, h: f64) -> Outcome {
+fn t3(mat: &Material, mode: &RollerMode, h: f64) -> Outcome {
     let laminate = Laminate::homogeneous(mat.clone(), HEIGHT).expect("laminate");
     let mesh = Mesh::layered(&laminate, WIDTH, h, h, &[], &[]).expect("mesh");
     let nodes = mesh.nodes.clone();
@@ -137,7 +102,7 @@ fn t3(mat: &Material, mode: &Mode, h: f64) -> Outcome {
     })
 }
 
-fn sem(mat: &Material, mode: &Mode, elements_x: usize, order: usize) -> Outcome {
+fn sem(mat: &Material, mode: &RollerMode, elements_x: usize, order: usize) -> Outcome {
     let elements_y = (elements_x / 4).max(1);
     let m = SemModel::new(
         (0..=elements_x)
@@ -169,7 +134,7 @@ fn main() {
     let mat = Orthotropic::preset("fabric_0_90")
         .and_then(|o| o.reduce(Plane::Strain))
         .expect("material");
-    let mode = Mode::new(&mat);
+    let mode = RollerMode::new(&mat, 2.0 * 2.0 * PI / WIDTH, PI / HEIGHT);
     println!(
         "roller mode, f = {:.3} MHz, {PERIODS} periods, central differences at 0.9 dt_crit",
         mode.omega / (2.0 * PI) / 1e6

@@ -9,6 +9,7 @@ pub mod accuracy;
 pub mod budget;
 pub mod contact;
 pub mod error;
+pub mod exact;
 pub mod fem;
 pub mod figures;
 pub mod format;

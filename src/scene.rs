@@ -167,6 +167,8 @@ impl Default for ReceiverSpec {
 /// along their edge, `x_m: [from, to]` on the top and bottom edges and
 /// `depth_m: [from, to]` below the top surface on the left and right edges, or on the whole
 /// edge without a range; the load is the consistent nodal load of a uniform traction.
+/// (The edge-source variants repeat their range fields rather than share a flattened struct:
+/// serde cannot deny unknown fields through `flatten`, and strict maps matter more here.)
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "kind", deny_unknown_fields)]
 pub enum SourceSpec {

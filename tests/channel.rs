@@ -2,29 +2,14 @@
 //! on a simulated scene, on a measured-style impulse response read from a file, and on
 //! recorded responses, with the same results.
 
-use std::path::PathBuf;
+mod common;
+
+use common::TempDir;
 use std::sync::Arc;
 use trnews::scene::{Scene, SceneSpec};
 use trnews::script::{Host, HostOptions};
 use trnews::signal::{self, Signal};
 use trnews::trnews::{delayed_tr_news, tr_news, Recording, Responder, TrNewsSpec};
-
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> TempDir {
-        let p = std::env::temp_dir().join(format!("trnews-channel-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).expect("temp dir");
-        TempDir(p)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 /// A script writes the uncracked smoke scene's impulse response (transducers included) to
 /// .npy, reads it back as a measured channel, and runs TR-NEWS and delayed TR-NEWS on both.
@@ -91,17 +76,22 @@ try { measured.respond(fa.source, 1.0); assert(false, "longer than the impulse r
 catch (e) { assert(e.contains("duration_s") && e.contains("impulse response length"), e); }
 "#;
 
-#[test]
-fn trnews_on_an_impulse_response_read_from_npy_matches_the_scene() {
-    let dir = TempDir::new("impulse");
-    let host = Host::new(HostOptions {
+/// Runs `script` with a fresh directory as both its output and its data directory.
+fn run_in_temp_dir(tag: &str, name: &str, script: &str) -> Result<(), trnews::script::ScriptError> {
+    let dir = TempDir::new(&format!("channel-{tag}"));
+    Host::new(HostOptions {
         out_dir: dir.0.clone(),
         data_dir: Some(dir.0.clone()),
         quiet: true,
         ..HostOptions::default()
     })
-    .expect("host");
-    host.run_str("measured_impulse.rhai", SCRIPT)
+    .expect("host")
+    .run_str(name, script)
+}
+
+#[test]
+fn trnews_on_an_impulse_response_read_from_npy_matches_the_scene() {
+    run_in_temp_dir("impulse", "measured_impulse.rhai", SCRIPT)
         .expect("scene and measured channel agree");
 }
 
@@ -141,15 +131,7 @@ catch (e) { assert(e.contains("was not recorded"), e); }
 
 #[test]
 fn trnews_on_recordings_read_from_csv_matches_the_scene() {
-    let dir = TempDir::new("recorded");
-    let host = Host::new(HostOptions {
-        out_dir: dir.0.clone(),
-        data_dir: Some(dir.0.clone()),
-        quiet: true,
-        ..HostOptions::default()
-    })
-    .expect("host");
-    host.run_str("recorded.rhai", RECORDED_SCRIPT)
+    run_in_temp_dir("recorded", "recorded.rhai", RECORDED_SCRIPT)
         .expect("recordings read from files reproduce the scene");
 }
 

@@ -3,25 +3,11 @@
 //! `--max-memory`, malformed files (clear errors, never panics) and round trips of what the
 //! writers wrote.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::TempDir;
+use std::path::Path;
 use trnews::script::{Host, HostOptions};
-
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> TempDir {
-        let p = std::env::temp_dir().join(format!("trnews-data-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).expect("temp dir");
-        TempDir(p)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 fn host(out: &Path, data: &Path, max_memory: u64) -> Host {
     Host::new(HostOptions {

@@ -10,25 +10,9 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use trnews::script::{Host, HostOptions};
 
-/// A fresh directory under the system temp dir, removed on drop.
-struct Temp(PathBuf);
-impl Drop for Temp {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-fn temp(tag: &str) -> Temp {
-    use std::sync::atomic::{AtomicU64, Ordering};
-    static N: AtomicU64 = AtomicU64::new(0);
-    let dir = std::env::temp_dir().join(format!(
-        "trnews-hostile-{tag}-{}-{}",
-        std::process::id(),
-        N.fetch_add(1, Ordering::Relaxed)
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    Temp(dir)
-}
+mod common;
+
+use common::TempDir;
 
 fn host(out: &Path, time_limit_s: f64) -> Host {
     Host::new(HostOptions {
@@ -70,7 +54,7 @@ const SMOKE: &str = "scene::preset(\"smoke\", #{crack: ()})";
 /// The reproducers of issue 11: each must be a clean error naming the field (or run cleanly).
 #[test]
 fn issue_11_reproducers_are_errors_naming_the_field() {
-    let dir = temp("repro");
+    let dir = TempDir::new("hostile-repro");
     let cases: Vec<(String, &str)> = vec![
         (format!("{SMOKE}.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{{duration_s: 1e-6, snapshot_every: 0}});"), "snapshot_every"),
         (format!("{SMOKE}.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{{duration_s: 1e10}});"), "duration_s"),
@@ -124,7 +108,7 @@ fn issue_11_reproducers_are_errors_naming_the_field() {
 /// field and the value written.
 #[test]
 fn open_scene_inputs_are_errors_naming_the_field() {
-    let dir = temp("open-scene");
+    let dir = TempDir::new("hostile-open-scene");
     let cases: Vec<(&str, &str)> = vec![
         (
             "#{sources: [#{kind: \"normal\", edge: \"left\", x_m: [0.0, 1e-3]}]}",
@@ -199,8 +183,8 @@ fn open_scene_inputs_are_errors_naming_the_field() {
 #[cfg(unix)]
 #[test]
 fn gmsh_files_are_read_inside_the_script_directory_symlinks_included() {
-    let dir = temp("gmsh-link");
-    let outside = temp("gmsh-outside");
+    let dir = TempDir::new("hostile-gmsh-link");
+    let outside = TempDir::new("hostile-gmsh-outside");
     let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts/gmsh_plate.msh");
     std::fs::copy(&mesh, outside.0.join("plate.msh")).unwrap();
     std::os::unix::fs::symlink(outside.0.join("plate.msh"), dir.0.join("link.msh")).unwrap();
@@ -210,7 +194,7 @@ fn gmsh_files_are_read_inside_the_script_directory_symlinks_included() {
             "scene::build(#{{gmsh: #{{path: \"{path}\", materials: #{{\"1\": \"epoxy\", \"2\": \"epoxy\"}}}}, crack: (), receivers: #{{x_m: [1e-3]}}, sources: [#{{kind: \"normal\", edge: \"top\"}}]}});"
         )
     };
-    let out = temp("gmsh-out");
+    let out = TempDir::new("hostile-gmsh-out");
     let run_file = |name: &str, text: &str| {
         let file = dir.0.join(name);
         std::fs::write(&file, text).unwrap();
@@ -227,7 +211,7 @@ fn gmsh_files_are_read_inside_the_script_directory_symlinks_included() {
 /// The operation limit 0 is refused; the time limit stops a script loop and a simulation.
 #[test]
 fn budgets_stop_runaway_scripts() {
-    let dir = temp("budget");
+    let dir = TempDir::new("hostile-budget");
     let zero = Host::new(HostOptions {
         out_dir: dir.0.clone(),
         max_operations: 0,
@@ -291,7 +275,7 @@ fn run_binary(dir: &Path, script: &str, args: &[&str]) -> (String, Duration) {
 /// that no limit tripped) both stop with an error naming the limit, at the script position.
 #[test]
 fn native_work_and_script_values_are_metered() {
-    let dir = temp("meter");
+    let dir = TempDir::new("hostile-meter");
     let (err, elapsed) = run_binary(
         &dir.0,
         "let s = signal::zeros(1e-8, 0.0, 4000000);\nfor i in 0..1000 { let e = s.envelope(); }",
@@ -331,7 +315,7 @@ fn native_work_and_script_values_are_metered() {
 /// location, and the host stays usable.
 #[test]
 fn a_panic_in_native_code_is_an_error() {
-    let dir = temp("panic");
+    let dir = TempDir::new("hostile-panic");
     let mut h = host(&dir.0, 20.0);
     let mut module = rhai::Module::new();
     module.set_native_fn("explode", || -> Result<(), Box<rhai::EvalAltResult>> {
@@ -359,7 +343,7 @@ fn a_panic_in_native_code_is_an_error() {
 fn ctrl_c_stops_scripts_and_native_runs() {
     use std::io::{BufRead, BufReader};
     use std::process::{Command, Stdio};
-    let dir = temp("sigint");
+    let dir = TempDir::new("hostile-sigint");
     let cases = [
         (
             "loop.rhai",
@@ -413,7 +397,7 @@ fn ctrl_c_stops_scripts_and_native_runs() {
 /// A scene above the memory limit is refused in under a second, with the estimate.
 #[test]
 fn memory_limit_refuses_large_scenes_quickly() {
-    let dir = temp("mem");
+    let dir = TempDir::new("hostile-mem");
     let h = Host::new(HostOptions {
         out_dir: dir.0.clone(),
         quiet: true,
@@ -445,7 +429,7 @@ fn memory_limit_refuses_large_scenes_quickly() {
 #[test]
 fn sandbox_symlinks_never_lead_out() {
     use std::os::unix::fs::symlink;
-    let base = temp("sandbox");
+    let base = TempDir::new("hostile-sandbox");
     let out = base.0.join("out");
     let outside = base.0.join("outside");
     std::fs::create_dir_all(out.join("inner")).expect("dirs");
@@ -513,7 +497,7 @@ fn sandbox_symlinks_never_lead_out() {
 
 #[test]
 fn stale_temp_files_of_dead_writers_are_removed() {
-    let dir = temp("stale");
+    let dir = TempDir::new("hostile-stale");
     // pid 999999999 does not exist (above Linux's pid_max)
     let stale = dir.0.join(".x.tmp-999999999-3.csv");
     std::fs::write(&stale, "half").expect("stale");
@@ -702,7 +686,7 @@ fn fuzz_scene_run_signal_plot_and_io_calls() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(300);
     let budget_s = 10.0;
-    let dir = temp("fuzz");
+    let dir = TempDir::new("hostile-fuzz");
     let h = host(&dir.0, budget_s);
     let mut g = Gen(seed);
     let start = Instant::now();

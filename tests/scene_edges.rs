@@ -91,15 +91,7 @@ fn spec(h: f64, sides: EdgeCondition) -> SceneSpec {
         }],
         receivers: ReceiverSpec {
             x_m: vec![0.1e-3],
-            at: POINTS
-                .iter()
-                .map(|&(x, y)| ReceiverAt {
-                    edge: None,
-                    x_m: Some(x),
-                    y_m: Some(y),
-                    depth_m: None,
-                })
-                .collect(),
+            at: at_points(&POINTS),
             ..Default::default()
         },
         ..Default::default()
@@ -107,6 +99,19 @@ fn spec(h: f64, sides: EdgeCondition) -> SceneSpec {
 }
 
 /// Runs the scene with the Ricker drive sampled at its step; u_y traces of the receivers.
+/// Receivers at interior points (x, y).
+fn at_points(points: &[(f64, f64)]) -> Vec<ReceiverAt> {
+    points
+        .iter()
+        .map(|&(x, y)| ReceiverAt {
+            edge: None,
+            x_m: Some(x),
+            y_m: Some(y),
+            depth_m: None,
+        })
+        .collect()
+}
+
 fn run(spec: &SceneSpec, dt: Option<f64>) -> (f64, Vec<Signal>) {
     run_pulse(spec, dt, PULSE, DURATION)
 }
@@ -402,21 +407,19 @@ fn a_periodic_cell_responds_like_the_middle_of_a_row_of_its_copies() {
     };
     let receivers = |offset: f64, edge: bool| ReceiverSpec {
         x_m: vec![offset + 0.5e-3],
-        at: [(0.0, 0.5e-3), (0.27e-3, 0.61e-3), (0.93e-3, 0.13e-3)]
-            .iter()
-            .map(|&(x, y)| ReceiverAt {
-                edge: None,
-                x_m: Some(offset + x),
-                y_m: Some(y),
-                depth_m: None,
-            })
-            .chain(edge.then_some(ReceiverAt {
-                edge: Some(Side::Left),
-                x_m: None,
-                y_m: None,
-                depth_m: Some(0.5e-3),
-            }))
-            .collect(),
+        at: at_points(&[
+            (offset, 0.5e-3),
+            (offset + 0.27e-3, 0.61e-3),
+            (offset + 0.93e-3, 0.13e-3),
+        ])
+        .into_iter()
+        .chain(edge.then_some(ReceiverAt {
+            edge: Some(Side::Left),
+            x_m: None,
+            y_m: None,
+            depth_m: Some(0.5e-3),
+        }))
+        .collect(),
         component: 0,
         ..Default::default()
     };
@@ -488,15 +491,7 @@ fn off_node_receivers_converge_like_the_nodal_solution_in_two_dimensions() {
         }];
         s.receivers = ReceiverSpec {
             x_m: vec![],
-            at: points
-                .iter()
-                .map(|&(x, y)| ReceiverAt {
-                    edge: None,
-                    x_m: Some(x),
-                    y_m: Some(y),
-                    depth_m: None,
-                })
-                .collect(),
+            at: at_points(&points),
             ..Default::default()
         };
         s
@@ -553,15 +548,7 @@ fn a_gmsh_stack_carries_the_plane_wave_of_its_physical_groups() {
     let points = [(2.0e-3, 1.2e-3), (2.0e-3, 2.0e-3), (1.7e-3, 0.5e-3)];
     spec.receivers = ReceiverSpec {
         x_m: vec![],
-        at: points
-            .iter()
-            .map(|&(x, y)| ReceiverAt {
-                edge: None,
-                x_m: Some(x),
-                y_m: Some(y),
-                depth_m: None,
-            })
-            .collect(),
+        at: at_points(&points),
         ..Default::default()
     };
     let pulse = Ricker {

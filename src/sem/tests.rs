@@ -1,4 +1,5 @@
 use super::*;
+use crate::exact::RollerMode;
 use crate::material::{Orthotropic, Plane};
 use crate::mesh::Side;
 
@@ -122,47 +123,6 @@ fn stiffness_product_is_bit_identical_across_thread_counts() {
             .install(|| times(&m, &u))
     };
     assert_eq!(run(1), run(2));
-}
-
-/// Orthotropic box with rollers on every edge (u_n = 0, no shear traction): the mode
-/// u_x = A sin(kx x) cos(ky y), u_y = B cos(kx x) sin(ky y) is exact, with
-/// rho w^2 [A, B] = [[C11 kx^2 + C66 ky^2, (C12 + C66) kx ky], [., C22 ky^2 + C66 kx^2]] [A, B].
-struct RollerMode {
-    kx: f64,
-    ky: f64,
-    a: f64,
-    b: f64,
-    omega: f64,
-}
-
-impl RollerMode {
-    fn new(mat: &Material, kx: f64, ky: f64) -> RollerMode {
-        let c = &mat.stiffness_pa;
-        let (k11, k12, k22) = (
-            c[0][0] * kx * kx + c[2][2] * ky * ky,
-            (c[0][1] + c[2][2]) * kx * ky,
-            c[1][1] * ky * ky + c[2][2] * kx * kx,
-        );
-        // lower eigenpair of the symmetric 2x2
-        let mean = 0.5 * (k11 + k22);
-        let lambda = mean - (0.25 * (k11 - k22).powi(2) + k12 * k12).sqrt();
-        let (a, b) = (k12, lambda - k11);
-        let n = (a * a + b * b).sqrt();
-        RollerMode {
-            kx,
-            ky,
-            a: a / n,
-            b: b / n,
-            omega: (lambda / mat.density_kg_m3).sqrt(),
-        }
-    }
-
-    fn at(&self, x: f64, y: f64) -> [f64; 2] {
-        [
-            self.a * (self.kx * x).sin() * (self.ky * y).cos(),
-            self.b * (self.kx * x).cos() * (self.ky * y).sin(),
-        ]
-    }
 }
 
 fn roller_box(order: usize) -> (SemModel, Vec<bool>) {

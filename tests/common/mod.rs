@@ -1,6 +1,7 @@
 //! Small scenes shared by the physics tests.
 #![allow(dead_code)]
 
+use std::path::{Path, PathBuf};
 use trnews::fem::Model;
 use trnews::laminate::{Laminate, Layer};
 use trnews::material::{Material, Orthotropic, Plane};
@@ -124,4 +125,40 @@ pub fn rel_l2(a: &[f64], b: &[f64]) -> f64 {
     let num: f64 = (0..n).map(|i| (a[i] - b[i]).powi(2)).sum();
     let den: f64 = b[..n].iter().map(|v| v * v).sum();
     (num / den).sqrt()
+}
+
+/// A fresh, empty directory under the system temp dir, removed on drop; unique per process
+/// and call.
+pub struct TempDir(pub PathBuf);
+
+impl TempDir {
+    pub fn new(tag: &str) -> TempDir {
+        use std::sync::atomic::{AtomicU64, Ordering};
+        static N: AtomicU64 = AtomicU64::new(0);
+        let dir = std::env::temp_dir().join(format!(
+            "trnews-{tag}-{}-{}",
+            std::process::id(),
+            N.fetch_add(1, Ordering::Relaxed)
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        TempDir(dir)
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.0
+    }
+
+    /// Writes a script file into the directory and returns its path.
+    pub fn script(&self, name: &str, text: &str) -> PathBuf {
+        let p = self.0.join(name);
+        std::fs::write(&p, text).expect("write script");
+        p
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }
