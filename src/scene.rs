@@ -1562,7 +1562,7 @@ pub struct TransmitOptions {
     pub record_crack: bool,
     /// Override the scene's contact options for this run (`None` keeps the scene's).
     pub contact: Option<ContactOptions>,
-    /// Show a progress bar on a terminal (unless progress is off globally, e.g. `--quiet`).
+    /// Report progress (shown as a bar by the script host unless `--quiet`).
     pub progress: bool,
 }
 
@@ -1595,7 +1595,7 @@ impl Scene {
             snapshot_dir: options.snapshot_dir.clone(),
             record_crack: options.record_crack,
             contact: options.contact.or(self.contact),
-            progress: options.progress && RunConfig::default().progress,
+            progress: options.progress,
             ..self.run_config(options.duration_s)
         }
     }

@@ -20,6 +20,7 @@ mod io;
 mod laminate;
 mod material;
 mod plot;
+mod progress;
 mod scene;
 mod signal;
 mod study;
@@ -251,7 +252,7 @@ impl HostContext {
             .as_deref()
             .and_then(Option::as_ref)
         {
-            Some(_) => crate::solve::progress_group().suspend(|| eprintln!("{line}")),
+            Some(_) => progress::group().suspend(|| eprintln!("{line}")),
             None => eprintln!("{line}"),
         }
     }
@@ -266,7 +267,7 @@ impl HostContext {
         }
         let spinner =
             indicatif::ProgressBar::new_spinner().with_message(format!("running {script}"));
-        let bar = crate::solve::progress_group().add(spinner);
+        let bar = progress::group().add(spinner);
         bar.enable_steady_tick(Duration::from_millis(200));
         if let Ok(mut p) = self.progress.write() {
             *p = Some(bar);
@@ -349,7 +350,11 @@ impl Host {
             .map(crate::input::InputRoot::open)
             .transpose()
             .map_err(|e| ScriptError::new("--data", e.to_string()))?;
-        crate::solve::show_progress(!options.quiet);
+        crate::solve::progress::set_reporter(if options.quiet {
+            None
+        } else {
+            Some(Arc::new(progress::TerminalBars))
+        });
         let context = Arc::new(HostContext {
             out_dir: options.out_dir,
             root: Some(root),

@@ -228,7 +228,7 @@ pub(super) fn run(
     let mut flows = Flows::default();
     let (k0, s0) = staggered_energy(model, &op, dt, &u_prev, &u, &mut ku);
     ledger.initial_j = k0 + s0;
-    let progress = super::progress_bar(config.progress, steps);
+    let mut progress = super::progress::start(config.progress, steps);
     let setup_time_s = setup.elapsed().as_secs_f64();
     let clock = Instant::now();
 
@@ -306,8 +306,8 @@ pub(super) fn run(
         }
         std::mem::swap(&mut u_prev, &mut u);
         std::mem::swap(&mut u, &mut u_next);
-        if step % 1024 == 0 {
-            progress.set_position(step as u64);
+        if step % super::progress::REPORT_EVERY == 0 {
+            progress(step);
         }
     }
     sample_ledger(
@@ -322,7 +322,7 @@ pub(super) fn run(
         &flows,
         stab.dt_crit_s,
     )?;
-    progress.finish_and_clear();
+    drop(progress);
     let wall_time_s = clock.elapsed().as_secs_f64();
 
     let to_signal = |v: Vec<f64>| Signal {

@@ -5,6 +5,7 @@
 mod explicit;
 mod ledger;
 mod newmark;
+pub mod progress;
 pub mod stability;
 
 use crate::contact::{ContactOptions, ContactReport, ContactSeries};
@@ -90,7 +91,7 @@ pub struct RunConfig {
     pub initial_displacement: Option<Vec<f64>>,
     /// Initial velocity, zero if `None`.
     pub initial_velocity: Option<Vec<f64>>,
-    /// Show a progress bar on a terminal (default: on unless [`show_progress`] turned it off).
+    /// Report progress to the installed [`progress::ProgressReporter`], if any.
     pub progress: bool,
     /// A precomputed stability estimate for this model, to skip the power iteration.
     pub stability: Option<StabilityEstimate>,
@@ -111,7 +112,7 @@ impl Default for RunConfig {
             contact: None,
             initial_displacement: None,
             initial_velocity: None,
-            progress: SHOW_PROGRESS.load(std::sync::atomic::Ordering::Relaxed),
+            progress: true,
             stability: None,
         }
     }
@@ -498,34 +499,4 @@ pub fn point_receiver(
             .collect(),
         quantity,
     })
-}
-
-/// Whether runs show progress bars by default (the CLI's `--quiet` turns this off).
-static SHOW_PROGRESS: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
-
-/// Turns the default progress display of runs on or off.
-pub fn show_progress(on: bool) {
-    SHOW_PROGRESS.store(on, std::sync::atomic::Ordering::Relaxed);
-}
-
-/// The progress display all bars belong to, so parallel runs (and a host's spinner) share
-/// the terminal instead of overwriting each other's lines.
-pub fn progress_group() -> &'static indicatif::MultiProgress {
-    static GROUP: std::sync::OnceLock<indicatif::MultiProgress> = std::sync::OnceLock::new();
-    GROUP.get_or_init(indicatif::MultiProgress::new)
-}
-
-/// A progress bar on stderr when `show` and stderr is a terminal; hidden otherwise.
-fn progress_bar(show: bool, steps: usize) -> indicatif::ProgressBar {
-    use std::io::IsTerminal;
-    if !show || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = progress_group().add(indicatif::ProgressBar::new(steps as u64));
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "{elapsed_precise} [{bar:40}] {pos}/{len} steps ({eta} left)",
-    ) {
-        bar.set_style(style);
-    }
-    bar
 }

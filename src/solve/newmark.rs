@@ -211,7 +211,7 @@ pub(super) fn run(
     let mut ledger = EnergyLedger::default();
     let mut flows = Flows::default();
     ledger.initial_j = energy(model, &mass, &u, &v, &mut work);
-    let progress = super::progress_bar(config.progress, steps);
+    let mut progress = super::progress::start(config.progress, steps);
     let setup_time_s = setup.elapsed().as_secs_f64();
     let clock = Instant::now();
     let (c1, c2) = (4.0 / (dt * dt), 4.0 / dt);
@@ -281,8 +281,8 @@ pub(super) fn run(
         }
         std::mem::swap(&mut v, &mut work);
         std::mem::swap(&mut u, &mut u_next);
-        if step % 256 == 0 {
-            progress.set_position(step as u64);
+        if step % super::progress::REPORT_EVERY == 0 {
+            progress(step);
         }
     }
     sample(
@@ -297,7 +297,7 @@ pub(super) fn run(
         &flows,
         stab.dt_crit_s,
     )?;
-    progress.finish_and_clear();
+    drop(progress);
     let report = RunReport {
         integrator: format!(
             "Newmark average acceleration ({} mass)",
