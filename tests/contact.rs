@@ -449,7 +449,7 @@ fn crack_that_never_closes_matches_open_crack_bit_for_bit_and_no_crack_skips_con
     };
     let with = run(
         &model,
-        &[src.clone()],
+        std::slice::from_ref(&src),
         &recv,
         &RunConfig {
             contact: exact(0.6),
@@ -457,7 +457,7 @@ fn crack_that_never_closes_matches_open_crack_bit_for_bit_and_no_crack_skips_con
         },
     )
     .unwrap();
-    let open = run(&model, &[src.clone()], &recv, &base).unwrap();
+    let open = run(&model, std::slice::from_ref(&src), &recv, &base).unwrap();
     assert_eq!(with.report.contact.as_ref().unwrap().steps_in_contact, 0);
     assert!(
         with.crack

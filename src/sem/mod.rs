@@ -38,6 +38,11 @@ pub struct SemModel {
     pub row_material: Vec<usize>,
     /// Diagonal mass per DOF, M_kk = sum over elements of rho w_a w_b J (kg).
     pub lumped_mass: Vec<f64>,
+    /// DOFs held at zero (none unless set).
+    pub fixed_dofs: Vec<usize>,
+    /// (DOF, c) of the absorbing edges' dashpots (none unless set, see
+    /// [`SemModel::lysmer_dashpots`]).
+    pub dashpots: Vec<(usize, f64)>,
     gll_x: Gll,
     /// GLL rule of each element row (its order across y).
     gll_y: Vec<Gll>,
@@ -125,6 +130,8 @@ impl SemModel {
             materials,
             row_material,
             lumped_mass: Vec::new(),
+            fixed_dofs: Vec::new(),
+            dashpots: Vec::new(),
             gll_x,
             gll_y,
             derivative_x,
@@ -395,7 +402,7 @@ impl SemModel {
     /// edge weights: per edge node, rho V_p times its weight on the normal DOF and rho V_s on
     /// the tangential one, V_p along the side's normal, from the material of the element it
     /// belongs to (a node shared by two element rows gets both halves). Sorted by DOF.
-    pub fn dashpots(&self, sides: &[Side]) -> Vec<(usize, f64)> {
+    pub fn lysmer_dashpots(&self, sides: &[Side]) -> Vec<(usize, f64)> {
         let mut c = std::collections::BTreeMap::<usize, f64>::new();
         for &side in sides {
             let normal = match side {

@@ -8,50 +8,46 @@
 //! tied pair takes the mass-weighted mean of its two updates, the update of one DOF of mass
 //! m_l + m_r under the force f_l + f_r), dashpot DOFs, crack pairs. Fixed DOFs have
 //! dt^2/m = 0 and so never move. Nothing is allocated per step.
-//! The kernel is [`StiffnessOperator::explicit_update`]: matrix-free stencils on structured
-//! meshes, the assembled K elsewhere.
+//! The kernel is the discretisation's [`Discretisation::explicit_update`] (for T3: matrix-free
+//! stencils on structured meshes, the assembled K elsewhere; for spectral elements: sum
+//! factorisation); the contact law is a type parameter ([`ContactLaw`]).
 
-use super::ledger::{EnergyLedger, Flows};
-use super::{
-    sample_sources, stability, CrackTraces, Quantity, Receiver, RunConfig, RunOutput, RunReport,
-    Source,
-};
-use crate::contact::ContactSolver;
-use crate::error::{Error, Result};
-use crate::fem::{Model, StiffnessOperator};
-use crate::signal::Signal;
+use super::discretisation::Discretisation;
+use super::ledger::Flows;
+use super::stepper::{EnergySample, Fields, Stepper, Velocity};
+use super::SampledSources;
+use crate::contact::ContactLaw;
+use crate::error::Result;
 use rayon::prelude::*;
-use std::time::Instant;
-
-/// A run is declared unstable when its kinetic energy exceeds this multiple of the energy put in.
-const BLOW_UP_FACTOR: f64 = 100.0;
 
 /// Per-DOF constants of the scheme.
-struct Coefficients {
+pub struct Coefficients {
     /// dt^2 / m, zero on fixed DOFs.
     a: Vec<f64>,
     /// (DOF, c, r = c dt / 2m) for every dashpot.
     dashpots: Vec<(usize, f64, f64)>,
-    /// Compliance of the corrected update, dt^2 / (m (1 + r)).
-    compliance: Vec<f64>,
+    /// Compliance of the corrected update, dt^2 / (m (1 + r)): how far a unit force moves a
+    /// DOF in one step (the contact solvers' D).
+    pub compliance: Vec<f64>,
     /// (left DOF, right DOF, m_l / (m_l + m_r)) for every periodic tie.
     ties: Vec<(usize, usize, f64)>,
 }
 
 impl Coefficients {
-    fn new(model: &Model, dt: f64) -> Coefficients {
-        let mut a: Vec<f64> = model.lumped_mass.iter().map(|m| dt * dt / m).collect();
-        for &d in &model.fixed_dofs {
+    /// The constants of `body` at step `dt`.
+    pub fn new(body: &impl Discretisation, dt: f64) -> Coefficients {
+        let m = body.lumped_mass();
+        let mut a: Vec<f64> = m.iter().map(|m| dt * dt / m).collect();
+        for &d in body.fixed_dofs() {
             a[d] = 0.0;
         }
-        let mut dashpots: Vec<(usize, f64, f64)> = model
-            .dashpots
+        let mut dashpots: Vec<(usize, f64, f64)> = body
+            .dashpots()
             .iter()
-            .map(|&(d, c)| (d, c, c * dt / (2.0 * model.lumped_mass[d])))
+            .map(|&(d, c)| (d, c, c * dt / (2.0 * m[d])))
             .collect();
-        let m = &model.lumped_mass;
-        let ties: Vec<(usize, usize, f64)> = model
-            .periodic
+        let ties: Vec<(usize, usize, f64)> = body
+            .periodic_ties()
             .iter()
             .map(|&(l, r)| (l, r, m[l] / (m[l] + m[r])))
             .collect();
@@ -97,317 +93,177 @@ fn tied_dashpots(
 /// DOFs per parallel task of the energy sums.
 const ENERGY_CHUNK: usize = 8192;
 
-/// Energy at t_{n-1/2}: kinetic 1/2 v^T M v with v = (u_n - u_{n-1})/dt, strain 1/2 u_{n-1}^T K u_n.
-/// Summed in parallel over fixed chunks of DOFs, the chunk sums then added in order: the
-/// result does not depend on the thread count. `ku` is scratch (it ends up holding each
-/// chunk's two partial sums in its first two entries).
-fn staggered_energy(
-    model: &Model,
-    op: &StiffnessOperator,
+/// Central differences with lumped mass over any [`Discretisation`], with contact law `C`:
+/// the state (u_{n-1}, u_n, u_{n+1}) and every buffer are allocated once.
+pub struct CentralDifference<'a, D: Discretisation, C: ContactLaw> {
+    body: &'a D,
+    work: D::Workspace,
+    coef: Coefficients,
     dt: f64,
-    u_prev: &[f64],
-    u: &[f64],
-    ku: &mut [f64],
-) -> (f64, f64) {
-    op.mul(u, ku);
-    ku.par_chunks_mut(ENERGY_CHUNK)
-        .enumerate()
-        .for_each(|(c, chunk)| {
-            let r = c * ENERGY_CHUNK..c * ENERGY_CHUNK + chunk.len();
-            let (mut kinetic, mut strain) = (0.0, 0.0);
-            for (((&kui, &ui), &pi), &mi) in chunk
-                .iter()
-                .zip(&u[r.clone()])
-                .zip(&u_prev[r.clone()])
-                .zip(&model.lumped_mass[r])
-            {
-                let v = (ui - pi) / dt;
-                kinetic += mi * v * v;
-                strain += pi * kui;
-            }
-            // DOFs come in pairs and the chunk size is even: every chunk has 2+ entries.
-            chunk[0] = kinetic;
-            chunk[1] = strain;
-        });
-    let (mut kinetic, mut strain) = (0.0, 0.0);
-    for chunk in ku.chunks(ENERGY_CHUNK) {
-        kinetic += chunk[0];
-        strain += chunk[1];
-    }
-    (0.5 * kinetic, 0.5 * strain)
+    sources: SampledSources<'a>,
+    /// The contact law (read its diagnostics with [`CentralDifference::finish`]).
+    contact: C,
+    u_prev: Vec<f64>,
+    u: Vec<f64>,
+    u_next: Vec<f64>,
+    /// Scratch of the energy sums.
+    ku: Vec<f64>,
+    flows: Flows,
 }
 
-fn trace_value(r: &Receiver, dt: f64, u_prev: &[f64], u: &[f64], u_next: &[f64]) -> f64 {
-    match r.quantity {
-        Quantity::Displacement => r.weights.iter().map(|&(d, w)| w * u[d]).sum(),
-        Quantity::Velocity => {
-            r.weights
-                .iter()
-                .map(|&(d, w)| w * (u_next[d] - u_prev[d]))
-                .sum::<f64>()
-                / (2.0 * dt)
+impl<'a, D: Discretisation, C: ContactLaw> CentralDifference<'a, D, C> {
+    /// The scheme at step `dt` from u_0 (zero if `None`) and v_0 (zero if `None`): u_{-1} =
+    /// u_0 - dt v_0, so the staggered velocity v_{-1/2} equals v_0. Fixed DOFs start at zero.
+    pub fn new(
+        body: &'a D,
+        coef: Coefficients,
+        dt: f64,
+        sources: SampledSources<'a>,
+        mut contact: C,
+        initial_displacement: Option<&[f64]>,
+        initial_velocity: Option<&[f64]>,
+    ) -> Self {
+        let n = body.dofs();
+        let mut u = initial_displacement.map_or_else(|| vec![0.0; n], <[f64]>::to_vec);
+        for &d in body.fixed_dofs() {
+            u[d] = 0.0;
         }
-    }
-}
-
-/// Runs the explicit scheme.
-pub(super) fn run(
-    model: &Model,
-    sources: &[Source],
-    receivers: &[Receiver],
-    config: &RunConfig,
-) -> Result<RunOutput> {
-    let setup = Instant::now();
-    let op = StiffnessOperator::new(model);
-    let stab = config
-        .stability
-        .unwrap_or_else(|| stability::estimate(model));
-    let dt = config.dt_s.unwrap_or(config.step_safety * stab.dt_crit_s);
-    let ratio = dt / stab.dt_crit_s;
-    if ratio > 1.0 && !config.force {
-        return Err(Error::StepTooLarge {
-            dt_s: dt,
-            dt_crit_s: stab.dt_crit_s,
-            ratio,
-        });
-    }
-    let steps = super::run_steps(model, sources.len(), receivers.len(), config, dt)?;
-    let n = model.dofs();
-    let coef = Coefficients::new(model, dt);
-    let forces = sample_sources(sources, dt, steps)?;
-    let mut u = config
-        .initial_displacement
-        .clone()
-        .unwrap_or_else(|| vec![0.0; n]);
-    for &d in &model.fixed_dofs {
-        u[d] = 0.0;
-    }
-    // u_{-1} = u_0 - dt v_0: the staggered velocity v_{-1/2} equals the initial velocity.
-    let mut u_prev = u.clone();
-    if let Some(v0) = &config.initial_velocity {
-        for (d, p) in u_prev.iter_mut().enumerate() {
-            if coef.a[d] != 0.0 {
-                *p -= dt * v0[d];
-            }
-        }
-    }
-    let mut u_next = vec![0.0; n];
-    let mut ku = vec![0.0; n];
-    let mut contact = match (&model.crack, &config.contact) {
-        (Some(crack), Some(options)) => Some(ContactSolver::new(
-            crack,
-            &coef.compliance,
-            *options,
-            steps,
-        )?),
-        _ => None,
-    };
-    if let Some(c) = contact.as_mut() {
-        c.reset_stick_points(&u);
-    }
-    let mut traces: Vec<Vec<f64>> = receivers
-        .iter()
-        .map(|_| Vec::with_capacity(steps))
-        .collect();
-    let crack_pairs = model
-        .crack
-        .as_ref()
-        .filter(|_| config.record_crack)
-        .map(|c| c.pairs.clone())
-        .unwrap_or_default();
-    let mut crack_master: Vec<Vec<f64>> = crack_pairs
-        .iter()
-        .map(|_| Vec::with_capacity(steps))
-        .collect();
-    let mut crack_slave: Vec<Vec<f64>> = crack_pairs
-        .iter()
-        .map(|_| Vec::with_capacity(steps))
-        .collect();
-    let mut snapshots = Vec::new();
-    let mut ledger = EnergyLedger::default();
-    let mut flows = Flows::default();
-    let (k0, s0) = staggered_energy(model, &op, dt, &u_prev, &u, &mut ku);
-    ledger.initial_j = k0 + s0;
-    let mut progress = super::progress::start(config.progress, steps);
-    let setup_time_s = setup.elapsed().as_secs_f64();
-    let clock = Instant::now();
-
-    for step in 0..steps {
-        if step % 256 == 0 {
-            crate::budget::check()?;
-        }
-        if step % config.ledger_every == 0 {
-            sample_ledger(
-                model,
-                &op,
-                dt,
-                step,
-                &u_prev,
-                &u,
-                &mut ku,
-                &mut ledger,
-                &flows,
-                stab.dt_crit_s,
-            )?;
-        }
-        op.explicit_update(&coef.a, &u_prev, &u, &mut u_next);
-        for (source, values) in sources.iter().zip(&forces) {
-            let f = values[step];
-            if f != 0.0 {
-                for &(d, w) in &source.weights {
-                    u_next[d] += coef.a[d] * w * f;
+        let mut u_prev = u.clone();
+        if let Some(v0) = initial_velocity {
+            for (d, p) in u_prev.iter_mut().enumerate() {
+                if coef.a[d] != 0.0 {
+                    *p -= dt * v0[d];
                 }
             }
         }
-        for &(l, r, w) in &coef.ties {
+        contact.start(&u);
+        CentralDifference {
+            body,
+            work: body.workspace(),
+            coef,
+            dt,
+            sources,
+            contact,
+            u_prev,
+            u,
+            u_next: vec![0.0; n],
+            ku: vec![0.0; n],
+            flows: Flows::default(),
+        }
+    }
+
+    /// The current displacement u_n (after [`Stepper::commit`]: the newest state).
+    pub fn displacement(&self) -> &[f64] {
+        &self.u
+    }
+
+    /// The contact law, for its diagnostics once the run is over.
+    pub fn finish(self) -> C {
+        self.contact
+    }
+
+    /// Adds the work of each source over step n, f_n w (u_{n+1} - u_{n-1}) / 2, to the flows.
+    fn add_source_work(&mut self, step: usize) {
+        for (weights, values) in self.sources.iter() {
+            self.flows.source_work += 0.5
+                * values[step]
+                * weights
+                    .iter()
+                    .map(|&(d, w)| w * (self.u_next[d] - self.u_prev[d]))
+                    .sum::<f64>();
+        }
+    }
+}
+
+impl<D: Discretisation, C: ContactLaw> Stepper for CentralDifference<'_, D, C> {
+    fn dt_s(&self) -> f64 {
+        self.dt
+    }
+
+    /// Predictor, sources, periodic ties, dashpots, contact correction (module docs).
+    fn advance(&mut self, step: usize) -> Result<()> {
+        let (a, u_prev, u) = (&self.coef.a, &self.u_prev, &self.u);
+        let u_next = &mut self.u_next;
+        self.body
+            .explicit_update(a, u_prev, u, u_next, &mut self.work);
+        for (weights, values) in self.sources.iter() {
+            let f = values[step];
+            if f != 0.0 {
+                for &(d, w) in weights {
+                    u_next[d] += a[d] * w * f;
+                }
+            }
+        }
+        for &(l, r, w) in &self.coef.ties {
             let tied = w * u_next[l] + (1.0 - w) * u_next[r];
             u_next[l] = tied;
             u_next[r] = tied;
         }
-        for &(d, c, r) in &coef.dashpots {
+        for &(d, c, r) in &self.coef.dashpots {
             let q = u_next[d] - 2.0 * u[d] + u_prev[d];
             u_next[d] = (q + 2.0 * u[d] - (1.0 - r) * u_prev[d]) / (1.0 + r);
             let du = u_next[d] - u_prev[d];
-            flows.dashpot_loss += c * du * du / (4.0 * dt);
+            self.flows.dashpot_loss += c * du * du / (4.0 * self.dt);
         }
-        if let Some(c) = contact.as_mut() {
-            c.apply(&mut u_next)?;
-            c.for_each_force(|d, f| {
-                if d % 2 == 1 {
-                    flows.contact_normal_work += 0.5 * f * (u_next[d] - u_prev[d]);
-                } else {
-                    flows.contact_tangential_work += 0.5 * f * (u_next[d] - u_prev[d]);
-                }
-            });
+        self.contact.correct(u_prev, u_next, &mut self.flows)?;
+        self.add_source_work(step);
+        Ok(())
+    }
+
+    fn fields(&self, step: usize) -> Fields<'_> {
+        Fields {
+            step,
+            dt_s: self.dt,
+            displacement: &self.u,
+            velocity: Velocity::Central {
+                previous: &self.u_prev,
+                next: &self.u_next,
+            },
         }
-        for (source, values) in sources.iter().zip(&forces) {
-            let f = values[step];
-            flows.source_work += 0.5
-                * f
-                * source
-                    .weights
+    }
+
+    fn commit(&mut self) {
+        std::mem::swap(&mut self.u_prev, &mut self.u);
+        std::mem::swap(&mut self.u, &mut self.u_next);
+    }
+
+    /// Energy at t_{n-1/2}: kinetic 1/2 v^T M v with v = (u_n - u_{n-1})/dt, strain
+    /// 1/2 u_{n-1}^T K u_n. Summed in parallel over fixed chunks of DOFs, the chunk sums then
+    /// added in order: the result does not depend on the thread count.
+    fn energy(&mut self, step: usize) -> EnergySample {
+        let (dt, u_prev, u) = (self.dt, &self.u_prev, &self.u);
+        let mass = self.body.lumped_mass();
+        let ku = &mut self.ku;
+        self.body.stiffness_times(u, ku, &mut self.work);
+        ku.par_chunks_mut(ENERGY_CHUNK)
+            .enumerate()
+            .for_each(|(c, chunk)| {
+                let r = c * ENERGY_CHUNK..c * ENERGY_CHUNK + chunk.len();
+                let (mut kinetic, mut strain) = (0.0, 0.0);
+                for (((&kui, &ui), &pi), &mi) in chunk
                     .iter()
-                    .map(|&(d, w)| w * (u_next[d] - u_prev[d]))
-                    .sum::<f64>();
+                    .zip(&u[r.clone()])
+                    .zip(&u_prev[r.clone()])
+                    .zip(&mass[r])
+                {
+                    let v = (ui - pi) / dt;
+                    kinetic += mi * v * v;
+                    strain += pi * kui;
+                }
+                // DOFs come in pairs and the chunk size is even: every chunk has 2+ entries.
+                chunk[0] = kinetic;
+                chunk[1] = strain;
+            });
+        let (mut kinetic, mut strain) = (0.0, 0.0);
+        for chunk in ku.chunks(ENERGY_CHUNK) {
+            kinetic += chunk[0];
+            strain += chunk[1];
         }
-        for (r, t) in receivers.iter().zip(&mut traces) {
-            t.push(trace_value(r, dt, &u_prev, &u, &u_next));
-        }
-        for ((p, m), s) in crack_pairs
-            .iter()
-            .zip(&mut crack_master)
-            .zip(&mut crack_slave)
-        {
-            m.push(u[2 * p.master + 1]);
-            s.push(u[2 * p.slave + 1]);
-        }
-        if config.snapshot_every.is_some_and(|k| step % k == 0) {
-            super::keep_snapshot(config, &mut snapshots, step, dt, &u)?;
-        }
-        std::mem::swap(&mut u_prev, &mut u);
-        std::mem::swap(&mut u, &mut u_next);
-        if step % super::progress::REPORT_EVERY == 0 {
-            progress(step);
+        EnergySample {
+            time_s: (step as f64 - 0.5) * dt,
+            kinetic_j: 0.5 * kinetic,
+            strain_j: 0.5 * strain,
+            flows: self.flows,
         }
     }
-    sample_ledger(
-        model,
-        &op,
-        dt,
-        steps,
-        &u_prev,
-        &u,
-        &mut ku,
-        &mut ledger,
-        &flows,
-        stab.dt_crit_s,
-    )?;
-    drop(progress);
-    let wall_time_s = clock.elapsed().as_secs_f64();
-
-    let to_signal = |v: Vec<f64>| Signal {
-        dt_s: dt,
-        t0_s: 0.0,
-        samples: v,
-    };
-    let crack = model
-        .crack
-        .as_ref()
-        .filter(|_| config.record_crack)
-        .map(|c| CrackTraces {
-            x_m: c
-                .pairs
-                .iter()
-                .map(|p| model.mesh.nodes[p.master][0])
-                .collect(),
-            normal_gap: crack_master
-                .iter()
-                .zip(&crack_slave)
-                .map(|(m, s)| to_signal(s.iter().zip(m).map(|(s, m)| s - m).collect()))
-                .collect(),
-            master_uy: crack_master.into_iter().map(to_signal).collect(),
-            slave_uy: crack_slave.into_iter().map(to_signal).collect(),
-        });
-    let (contact, contact_series) = contact.map(|c| c.finish(steps, dt)).unzip();
-    let report = RunReport {
-        integrator: "explicit central difference (lumped mass)".into(),
-        wall_time_s,
-        setup_time_s,
-        steps,
-        dofs: n,
-        dt_s: dt,
-        dt_crit_s: stab.dt_crit_s,
-        stability_ratio: ratio,
-        energy_residual: ledger.final_residual(),
-        energy_residual_peak: ledger.peak_residual(),
-        source_work_j: flows.source_work,
-        contact,
-    };
-    Ok(RunOutput {
-        report,
-        traces: traces.into_iter().map(to_signal).collect(),
-        receiver_names: receivers.iter().map(|r| r.name.clone()).collect(),
-        crack,
-        contact_series,
-        snapshots,
-        ledger,
-    })
-}
-
-/// Appends a ledger sample at t_{step-1/2} and stops a run that blew up.
-#[allow(clippy::too_many_arguments)]
-fn sample_ledger(
-    model: &Model,
-    op: &StiffnessOperator,
-    dt: f64,
-    step: usize,
-    u_prev: &[f64],
-    u: &[f64],
-    ku: &mut [f64],
-    ledger: &mut EnergyLedger,
-    flows: &Flows,
-    dt_crit: f64,
-) -> Result<()> {
-    let (kinetic, strain) = staggered_energy(model, op, dt, u_prev, u, ku);
-    let time_s = (step as f64 - 0.5) * dt;
-    let unstable = |reason: String| Error::Unstable {
-        step,
-        time_s,
-        reason,
-        dt_s: dt,
-        dt_crit_s: dt_crit,
-    };
-    if !(kinetic.is_finite() && strain.is_finite()) {
-        return Err(unstable("displacements became non-finite".into()));
-    }
-    let budget = ledger.initial_j
-        + ledger
-            .source_work_j
-            .iter()
-            .fold(flows.source_work.abs(), |m, w| m.max(w.abs()));
-    if kinetic > BLOW_UP_FACTOR * budget && kinetic > 0.0 {
-        return Err(unstable(format!("kinetic energy {kinetic:.3e} J/m grew above {BLOW_UP_FACTOR} times the energy put in ({budget:.3e} J/m)")));
-    }
-    ledger.push(time_s, kinetic, strain, flows);
-    Ok(())
 }

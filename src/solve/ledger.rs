@@ -26,18 +26,22 @@ pub struct EnergyLedger {
     pub initial_j: f64,
 }
 
-/// Running sums of the energy flows, updated every step.
+/// Running sums of the energy flows, updated every step (J per m of thickness).
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Flows {
+pub struct Flows {
+    /// Work done by the sources.
     pub source_work: f64,
+    /// Energy absorbed by the dashpots.
     pub dashpot_loss: f64,
+    /// Work done by the normal contact forces (negative: energy removed).
     pub contact_normal_work: f64,
+    /// Work done by the tangential (friction) contact forces.
     pub contact_tangential_work: f64,
 }
 
 impl EnergyLedger {
     /// Appends a sample; returns its relative residual.
-    pub(crate) fn push(&mut self, time_s: f64, kinetic: f64, strain: f64, flows: &Flows) -> f64 {
+    pub fn push(&mut self, time_s: f64, kinetic: f64, strain: f64, flows: &Flows) -> f64 {
         let contact_loss = -(flows.contact_normal_work + flows.contact_tangential_work);
         let imbalance = kinetic + strain + flows.dashpot_loss + contact_loss
             - self.initial_j

@@ -2,20 +2,31 @@
 //! (eqs 65-69) and Newmark average acceleration (eq 61), with sources, receivers, the
 //! energy ledger (Sec. 4.10.1), stability checks and a serialisable run report.
 
-mod explicit;
+pub mod discretisation;
+pub mod explicit;
 mod ledger;
-mod newmark;
+pub mod newmark;
+pub mod observers;
 pub mod progress;
 pub mod stability;
+pub mod stepper;
 
-use crate::contact::{ContactOptions, ContactReport, ContactSeries};
+use crate::contact::{
+    ContactLaw, ContactOptions, ContactReport, ContactSeries, ContactSolver, NoContact,
+};
 use crate::error::{require_positive, Error, Result};
 use crate::fem::Model;
 use crate::mesh::Mesh;
 use crate::signal::Signal;
-pub use ledger::EnergyLedger;
+pub use discretisation::{Discretisation, Fem};
+pub use explicit::{CentralDifference, Coefficients};
+pub use ledger::{EnergyLedger, Flows};
+pub use newmark::Newmark;
+use observers::{CrackRecorder, LedgerMonitor, ReceiverTraces, SnapshotSink};
 use serde::{Deserialize, Serialize};
 pub use stability::StabilityEstimate;
+use std::time::Instant;
+pub use stepper::{drive, EnergySample, Fields, Observer, Stepper, Velocity};
 
 /// Which integrator advances the model.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Default)]
@@ -189,28 +200,6 @@ pub struct RunOutput {
     pub ledger: EnergyLedger,
 }
 
-/// Keeps a snapshot in memory, or writes it whole to the snapshot directory when there is one.
-fn keep_snapshot(
-    config: &RunConfig,
-    snapshots: &mut Vec<Snapshot>,
-    step: usize,
-    dt: f64,
-    u: &[f64],
-) -> Result<()> {
-    match &config.snapshot_dir {
-        Some(dir) => crate::io::write_npy(
-            &dir.join(format!("snapshot_{step:07}.npy")),
-            u,
-            &[u.len() / 2, 2],
-        )?,
-        None => snapshots.push(Snapshot {
-            time_s: step as f64 * dt,
-            displacement: u.to_vec(),
-        }),
-    }
-    Ok(())
-}
-
 /// Runs the model with the given sources and receivers.
 pub fn run(
     model: &Model,
@@ -252,7 +241,7 @@ pub fn run(
         }
     }
     match config.integrator {
-        Integrator::Explicit => explicit::run(model, sources, receivers, config),
+        Integrator::Explicit => run_explicit(model, sources, receivers, config),
         Integrator::Newmark { consistent_mass } => {
             if !model.periodic.is_empty() {
                 return Err(Error::invalid(
@@ -268,7 +257,7 @@ pub fn run(
                     "contact is implemented for the explicit integrator only",
                 ));
             }
-            newmark::run(model, sources, receivers, config, consistent_mass)
+            run_newmark(model, sources, receivers, config, consistent_mass)
         }
     }
 }
@@ -350,28 +339,285 @@ fn run_steps(
     Ok(steps as usize)
 }
 
-/// The source signals evaluated at every solver step t_n = n dt, n < steps.
-fn sample_sources(sources: &[Source], dt: f64, steps: usize) -> Result<Vec<Vec<f64>>> {
-    sources
-        .iter()
-        .map(|s| {
-            let sig = if ((s.signal.dt_s - dt) / dt).abs() < 1e-9 {
-                s.signal.clone()
-            } else {
-                crate::signal::resample(&s.signal, dt)?
-            };
-            Ok((0..steps)
-                .map(|n| {
-                    let k = ((n as f64 * dt - sig.t0_s) / dt).round();
-                    if k >= 0.0 && (k as usize) < sig.samples.len() {
-                        sig.samples[k as usize]
-                    } else {
-                        0.0
-                    }
-                })
-                .collect())
-        })
-        .collect()
+/// The sources with their signals evaluated at every solver step t_n = n dt, n < steps
+/// (resampled first when a signal's interval differs from dt; zero outside the signal).
+pub struct SampledSources<'a> {
+    sources: &'a [Source],
+    values: Vec<Vec<f64>>,
+}
+
+impl<'a> SampledSources<'a> {
+    /// Samples `sources` at `steps` steps of `dt`.
+    pub fn new(sources: &'a [Source], dt: f64, steps: usize) -> Result<Self> {
+        let values = sources
+            .iter()
+            .map(|s| {
+                let sig = if ((s.signal.dt_s - dt) / dt).abs() < 1e-9 {
+                    s.signal.clone()
+                } else {
+                    crate::signal::resample(&s.signal, dt)?
+                };
+                Ok((0..steps)
+                    .map(|n| {
+                        let k = ((n as f64 * dt - sig.t0_s) / dt).round();
+                        if k >= 0.0 && (k as usize) < sig.samples.len() {
+                            sig.samples[k as usize]
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect())
+            })
+            .collect::<Result<_>>()?;
+        Ok(SampledSources { sources, values })
+    }
+
+    /// Each source's (DOF, weight) pairs with its force values per step.
+    pub fn iter(&self) -> impl Iterator<Item = (&[(usize, f64)], &[f64])> {
+        self.sources
+            .iter()
+            .zip(&self.values)
+            .map(|(s, v)| (s.weights.as_slice(), v.as_slice()))
+    }
+
+    /// out_d += w_d f(t_step) for every source.
+    pub fn add_forces(&self, step: usize, out: &mut [f64]) {
+        for (weights, values) in self.iter() {
+            for &(d, w) in weights {
+                out[d] += w * values[step];
+            }
+        }
+    }
+}
+
+/// The observers of a standard run, as [`RunConfig`] asks for them.
+struct StandardObservers<'a> {
+    receivers: ReceiverTraces<'a>,
+    ledger: LedgerMonitor,
+    crack: Option<CrackRecorder<'a>>,
+    snapshots: Option<SnapshotSink>,
+}
+
+impl<'a> StandardObservers<'a> {
+    fn new(
+        model: &'a Model,
+        receivers: &'a [Receiver],
+        config: &RunConfig,
+        steps: usize,
+        stepper: &mut dyn Stepper,
+        dt_crit_s: f64,
+    ) -> Self {
+        StandardObservers {
+            receivers: ReceiverTraces::new(receivers, steps),
+            ledger: LedgerMonitor::new(stepper, config.ledger_every, dt_crit_s),
+            crack: model
+                .crack
+                .as_ref()
+                .filter(|_| config.record_crack)
+                .map(|c| CrackRecorder::new(c, steps)),
+            snapshots: config
+                .snapshot_every
+                .map(|k| SnapshotSink::new(k, config.snapshot_dir.clone())),
+        }
+    }
+
+    /// Runs `steps` steps of `stepper` under these observers (ledger first, as it samples
+    /// the state before each step).
+    fn drive(
+        &mut self,
+        stepper: &mut dyn Stepper,
+        steps: usize,
+        show_progress: bool,
+    ) -> Result<()> {
+        let mut observers: Vec<&mut dyn Observer> = vec![&mut self.ledger, &mut self.receivers];
+        if let Some(c) = self.crack.as_mut() {
+            observers.push(c);
+        }
+        if let Some(s) = self.snapshots.as_mut() {
+            observers.push(s);
+        }
+        let mut progress = progress::start(show_progress, steps);
+        drive(stepper, steps, &mut observers, &mut progress)
+    }
+
+    /// The run's output around its report.
+    fn output(
+        self,
+        model: &Model,
+        receivers: &[Receiver],
+        report: RunReport,
+        contact_series: Option<ContactSeries>,
+    ) -> RunOutput {
+        let dt = report.dt_s;
+        RunOutput {
+            traces: self.receivers.into_signals(dt),
+            receiver_names: receivers.iter().map(|r| r.name.clone()).collect(),
+            crack: self
+                .crack
+                .map(|c| c.into_traces(dt, |node| model.mesh.nodes[node][0])),
+            contact_series,
+            snapshots: self.snapshots.map(|s| s.snapshots).unwrap_or_default(),
+            ledger: self.ledger.ledger,
+            report,
+        }
+    }
+}
+
+/// What both integrators report, from the ledger and the clocks.
+fn report(
+    integrator: String,
+    ledger: &EnergyLedger,
+    times: (f64, f64),
+    steps: usize,
+    dofs: usize,
+    (dt_s, dt_crit_s): (f64, f64),
+) -> RunReport {
+    RunReport {
+        integrator,
+        wall_time_s: times.1,
+        setup_time_s: times.0,
+        steps,
+        dofs,
+        dt_s,
+        dt_crit_s,
+        stability_ratio: dt_s / dt_crit_s,
+        energy_residual: ledger.final_residual(),
+        energy_residual_peak: ledger.peak_residual(),
+        source_work_j: ledger.source_work_j.last().copied().unwrap_or(0.0),
+        contact: None,
+    }
+}
+
+/// Central differences on a T3 model: the contact law chosen once here, so the loop of a
+/// scene without a contacting crack is compiled without contact.
+fn run_explicit(
+    model: &Model,
+    sources: &[Source],
+    receivers: &[Receiver],
+    config: &RunConfig,
+) -> Result<RunOutput> {
+    let setup = Instant::now();
+    let fem = Fem::new(model);
+    let stab = config
+        .stability
+        .unwrap_or_else(|| stability::estimate(model));
+    let dt = config.dt_s.unwrap_or(config.step_safety * stab.dt_crit_s);
+    let ratio = dt / stab.dt_crit_s;
+    if ratio > 1.0 && !config.force {
+        return Err(Error::StepTooLarge {
+            dt_s: dt,
+            dt_crit_s: stab.dt_crit_s,
+            ratio,
+        });
+    }
+    let steps = run_steps(model, sources.len(), receivers.len(), config, dt)?;
+    let coef = Coefficients::new(&fem, dt);
+    let forced = SampledSources::new(sources, dt, steps)?;
+    let (u0, v0) = (
+        config.initial_displacement.as_deref(),
+        config.initial_velocity.as_deref(),
+    );
+    let run = (model, receivers, config, steps, stab.dt_crit_s, setup);
+    match (&model.crack, &config.contact) {
+        (Some(crack), Some(options)) => {
+            let solver = ContactSolver::new(crack, &coef.compliance, *options, steps)?;
+            let stepper = CentralDifference::new(&fem, coef, dt, forced, solver, u0, v0);
+            finish_explicit(stepper, run)
+        }
+        _ => {
+            let stepper = CentralDifference::new(&fem, coef, dt, forced, NoContact, u0, v0);
+            finish_explicit(stepper, run)
+        }
+    }
+}
+
+/// What a standard run needs besides its stepper: model, receivers, options, steps, dt_crit
+/// and the clock started at setup.
+type RunParts<'a> = (
+    &'a Model,
+    &'a [Receiver],
+    &'a RunConfig,
+    usize,
+    f64,
+    Instant,
+);
+
+/// Drives a central-difference stepper with the standard observers and reports.
+fn finish_explicit<C: ContactLaw>(
+    mut stepper: CentralDifference<'_, Fem<'_>, C>,
+    (model, receivers, config, steps, dt_crit, setup): RunParts<'_>,
+) -> Result<RunOutput> {
+    let mut observers =
+        StandardObservers::new(model, receivers, config, steps, &mut stepper, dt_crit);
+    let setup_time_s = setup.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    observers.drive(&mut stepper, steps, config.progress)?;
+    let times = (setup_time_s, clock.elapsed().as_secs_f64());
+    let dt = stepper.dt_s();
+    let mut report = report(
+        "explicit central difference (lumped mass)".into(),
+        &observers.ledger.ledger,
+        times,
+        steps,
+        model.dofs(),
+        (dt, dt_crit),
+    );
+    let (contact, series) = stepper.finish().finish(steps, dt).unzip();
+    report.contact = contact;
+    Ok(observers.output(model, receivers, report, series))
+}
+
+/// Newmark average acceleration on a T3 model with the standard observers.
+fn run_newmark(
+    model: &Model,
+    sources: &[Source],
+    receivers: &[Receiver],
+    config: &RunConfig,
+    consistent_mass: bool,
+) -> Result<RunOutput> {
+    let setup = Instant::now();
+    let stab = config
+        .stability
+        .unwrap_or_else(|| stability::estimate(model));
+    let dt = config
+        .dt_s
+        .ok_or_else(|| Error::invalid("dt_s", "none", "Newmark needs an explicit time step"))?;
+    let steps = run_steps(model, sources.len(), receivers.len(), config, dt)?;
+    let forced = SampledSources::new(sources, dt, steps + 1)?;
+    let mut stepper = Newmark::new(
+        model,
+        dt,
+        consistent_mass,
+        forced,
+        config.initial_displacement.as_deref(),
+        config.initial_velocity.as_deref(),
+    )?;
+    let mut observers = StandardObservers::new(
+        model,
+        receivers,
+        config,
+        steps,
+        &mut stepper,
+        stab.dt_crit_s,
+    );
+    let setup_time_s = setup.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    observers.drive(&mut stepper, steps, config.progress)?;
+    let times = (setup_time_s, clock.elapsed().as_secs_f64());
+    let mass = if consistent_mass {
+        "consistent"
+    } else {
+        "lumped"
+    };
+    let report = report(
+        format!("Newmark average acceleration ({mass} mass)"),
+        &observers.ledger.ledger,
+        times,
+        steps,
+        model.dofs(),
+        (dt, stab.dt_crit_s),
+    );
+    Ok(observers.output(model, receivers, report, None))
 }
 
 /// Nodal weights of a segment: each edge between consecutive `nodes` gives half its length

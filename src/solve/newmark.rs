@@ -5,19 +5,16 @@
 //! a_{n+1} = 4/dt^2 (u_{n+1} - u_n) - 4/dt v_n - a_n, v_{n+1} = v_n + dt/2 (a_n + a_{n+1}).
 //! It conserves 1/2 v^T M v + 1/2 u^T K u exactly without damping and forces.
 
-use super::ledger::{EnergyLedger, Flows};
-use super::{
-    sample_sources, stability, Quantity, Receiver, RunConfig, RunOutput, RunReport, Source,
-};
+use super::ledger::Flows;
+use super::stepper::{EnergySample, Fields, Stepper, Velocity};
+use super::SampledSources;
 use crate::error::{Error, Result};
 use crate::fem::{assemble_consistent_mass, BlockCsr, Model};
-use crate::signal::Signal;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
 };
 use faer::sparse::{SparseColMat, Triplet};
-use std::time::Instant;
 
 /// The mass operator: lumped (diagonal) or consistent (sparse).
 enum Mass {
@@ -120,258 +117,189 @@ fn factor(
     })
 }
 
-/// Runs Newmark average acceleration.
-pub(super) fn run(
-    model: &Model,
-    sources: &[Source],
-    receivers: &[Receiver],
-    config: &RunConfig,
-    consistent_mass: bool,
-) -> Result<RunOutput> {
-    let setup = Instant::now();
-    let stab = config
-        .stability
-        .unwrap_or_else(|| stability::estimate(model));
-    let dt = config
-        .dt_s
-        .ok_or_else(|| Error::invalid("dt_s", "none", "Newmark needs an explicit time step"))?;
-    let steps = super::run_steps(model, sources.len(), receivers.len(), config, dt)?;
-    let n = model.dofs();
-    let mut fixed = vec![false; n];
-    for &d in &model.fixed_dofs {
-        fixed[d] = true;
-    }
-    let mass = if consistent_mass {
-        Mass::Consistent(assemble_consistent_mass(&model.mesh, &model.materials)?)
-    } else {
-        Mass::Lumped(model.lumped_mass.clone())
-    };
-    let mut effective = factor(n, &fixed, |add| {
-        model.stiffness.for_each_entry(&mut *add);
-        mass.for_each_entry(|i, j, v| add(i, j, 4.0 / (dt * dt) * v));
-        for &(d, c) in &model.dashpots {
-            add(d, d, 2.0 / dt * c);
-        }
-    })?;
-    let forces = sample_sources(sources, dt, steps + 1)?;
-    let add_forces = |step: usize, out: &mut [f64]| {
-        for (s, values) in sources.iter().zip(&forces) {
-            for &(d, w) in &s.weights {
-                out[d] += w * values[step];
-            }
-        }
-    };
+/// Newmark average acceleration on a T3 model (assembled K, lumped or consistent mass): the
+/// state (u, v, a), the factored effective matrix and every buffer allocated once.
+pub struct Newmark<'a> {
+    model: &'a Model,
+    mass: Mass,
+    effective: Factor,
+    fixed: Vec<bool>,
+    dt: f64,
+    sources: SampledSources<'a>,
+    u: Vec<f64>,
+    v: Vec<f64>,
+    a: Vec<f64>,
+    u_next: Vec<f64>,
+    v_next: Vec<f64>,
+    /// Scratch of the right-hand side and of the energy sums.
+    work: Vec<f64>,
+    rhs: faer::Mat<f64>,
+    flows: Flows,
+}
 
-    let mut u = config
-        .initial_displacement
-        .clone()
-        .unwrap_or_else(|| vec![0.0; n]);
-    let mut v = config
-        .initial_velocity
-        .clone()
-        .unwrap_or_else(|| vec![0.0; n]);
-    let mut work = vec![0.0; n];
-    let mut rhs = faer::Mat::<f64>::zeros(n, 1);
-    // a_0 = M^-1 (f_0 - K u_0 - C v_0)
-    for (d, &f) in fixed.iter().enumerate() {
-        if f {
-            u[d] = 0.0;
-            v[d] = 0.0;
+impl<'a> Newmark<'a> {
+    /// The scheme at step `dt` with lumped or consistent mass, from u_0 and v_0 (zero if
+    /// `None`; fixed DOFs start at zero): factors S once and solves M a_0 = f_0 - K u_0 - C v_0.
+    /// `sources` must hold one more sample than the run has steps (f_{n+1} enters step n).
+    pub fn new(
+        model: &'a Model,
+        dt: f64,
+        consistent_mass: bool,
+        sources: SampledSources<'a>,
+        initial_displacement: Option<&[f64]>,
+        initial_velocity: Option<&[f64]>,
+    ) -> Result<Self> {
+        let n = model.dofs();
+        let mut fixed = vec![false; n];
+        for &d in &model.fixed_dofs {
+            fixed[d] = true;
         }
-    }
-    model.stiffness.mul(&u, &mut work);
-    for &(d, c) in &model.dashpots {
-        work[d] += c * v[d];
-    }
-    work.iter_mut().for_each(|w| *w = -*w);
-    add_forces(0, &mut work);
-    let mut a = match &mass {
-        Mass::Lumped(m) => work
-            .iter()
-            .zip(m)
-            .enumerate()
-            .map(|(d, (f, m))| if fixed[d] { 0.0 } else { f / m })
-            .collect::<Vec<f64>>(),
-        Mass::Consistent(m) => {
-            let mut llt = factor(n, &fixed, |add| m.for_each_entry(&mut *add))?;
-            let col = rhs.col_as_slice_mut(0);
-            for d in 0..n {
-                col[d] = if fixed[d] { 0.0 } else { work[d] };
+        let mass = if consistent_mass {
+            Mass::Consistent(assemble_consistent_mass(&model.mesh, &model.materials)?)
+        } else {
+            Mass::Lumped(model.lumped_mass.clone())
+        };
+        let effective = factor(n, &fixed, |add| {
+            model.stiffness.for_each_entry(&mut *add);
+            mass.for_each_entry(|i, j, v| add(i, j, 4.0 / (dt * dt) * v));
+            for &(d, c) in &model.dashpots {
+                add(d, d, 2.0 / dt * c);
             }
-            llt.solve_in_place(rhs.as_mut());
-            rhs.col_as_slice(0).to_vec()
-        }
-    };
-    let mut u_next = vec![0.0; n];
-    let mut traces: Vec<Vec<f64>> = receivers
-        .iter()
-        .map(|_| Vec::with_capacity(steps))
-        .collect();
-    let mut snapshots = Vec::new();
-    let mut ledger = EnergyLedger::default();
-    let mut flows = Flows::default();
-    ledger.initial_j = energy(model, &mass, &u, &v, &mut work);
-    let mut progress = super::progress::start(config.progress, steps);
-    let setup_time_s = setup.elapsed().as_secs_f64();
-    let clock = Instant::now();
-    let (c1, c2) = (4.0 / (dt * dt), 4.0 / dt);
+        })?;
+        let start = |x: Option<&[f64]>| {
+            let mut x = x.map_or_else(|| vec![0.0; n], <[f64]>::to_vec);
+            for (d, &f) in fixed.iter().enumerate() {
+                if f {
+                    x[d] = 0.0;
+                }
+            }
+            x
+        };
+        let (u, v) = (start(initial_displacement), start(initial_velocity));
+        let mut stepper = Newmark {
+            model,
+            mass,
+            effective,
+            fixed,
+            dt,
+            sources,
+            u,
+            v,
+            a: Vec::new(),
+            u_next: vec![0.0; n],
+            v_next: vec![0.0; n],
+            work: vec![0.0; n],
+            rhs: faer::Mat::<f64>::zeros(n, 1),
+            flows: Flows::default(),
+        };
+        stepper.a = stepper.initial_acceleration()?;
+        Ok(stepper)
+    }
 
-    for step in 0..steps {
-        if step % 256 == 0 {
-            crate::budget::check()?;
+    /// a_0 = M^-1 (f_0 - K u_0 - C v_0).
+    fn initial_acceleration(&mut self) -> Result<Vec<f64>> {
+        let (n, work) = (self.u.len(), &mut self.work);
+        self.model.stiffness.mul(&self.u, work);
+        for &(d, c) in &self.model.dashpots {
+            work[d] += c * self.v[d];
         }
-        if step % config.ledger_every == 0 {
-            sample(
-                model,
-                &mass,
-                step,
-                dt,
-                &u,
-                &v,
-                &mut work,
-                &mut ledger,
-                &flows,
-                stab.dt_crit_s,
-            )?;
-        }
-        for (r, t) in receivers.iter().zip(&mut traces) {
-            let x = if r.quantity == Quantity::Displacement {
-                &u
-            } else {
-                &v
-            };
-            t.push(r.weights.iter().map(|&(d, w)| w * x[d]).sum());
-        }
-        if config.snapshot_every.is_some_and(|k| step % k == 0) {
-            super::keep_snapshot(config, &mut snapshots, step, dt, &u)?;
-        }
-        for d in 0..n {
+        work.iter_mut().for_each(|w| *w = -*w);
+        self.sources.add_forces(0, work);
+        let fixed = &self.fixed;
+        Ok(match &self.mass {
+            Mass::Lumped(m) => work
+                .iter()
+                .zip(m)
+                .enumerate()
+                .map(|(d, (f, m))| if fixed[d] { 0.0 } else { f / m })
+                .collect(),
+            Mass::Consistent(m) => {
+                let mut llt = factor(n, fixed, |add| m.for_each_entry(&mut *add))?;
+                let col = self.rhs.col_as_slice_mut(0);
+                for d in 0..n {
+                    col[d] = if fixed[d] { 0.0 } else { work[d] };
+                }
+                llt.solve_in_place(self.rhs.as_mut());
+                self.rhs.col_as_slice(0).to_vec()
+            }
+        })
+    }
+}
+
+impl Stepper for Newmark<'_> {
+    fn dt_s(&self) -> f64 {
+        self.dt
+    }
+
+    /// S u_{n+1} = f_{n+1} + M (4/dt^2 u_n + 4/dt v_n + a_n) + C (2/dt u_n + v_n), then
+    /// a_{n+1} and v_{n+1} (module docs); the source work uses the mean force over the step.
+    fn advance(&mut self, step: usize) -> Result<()> {
+        let dt = self.dt;
+        let (c1, c2) = (4.0 / (dt * dt), 4.0 / dt);
+        let (u, v, a) = (&self.u, &self.v, &mut self.a);
+        let u_next = &mut self.u_next;
+        for d in 0..u.len() {
             u_next[d] = c1 * u[d] + c2 * v[d] + a[d];
         }
-        mass.mul(&u_next, &mut work);
-        let col = rhs.col_as_slice_mut(0);
-        col.copy_from_slice(&work);
-        for &(d, c) in &model.dashpots {
+        self.mass.mul(u_next, &mut self.work);
+        let col = self.rhs.col_as_slice_mut(0);
+        col.copy_from_slice(&self.work);
+        for &(d, c) in &self.model.dashpots {
             col[d] += c * (2.0 / dt * u[d] + v[d]);
         }
-        add_forces(step + 1, col);
-        for (d, &f) in fixed.iter().enumerate() {
+        self.sources.add_forces(step + 1, col);
+        for (d, &f) in self.fixed.iter().enumerate() {
             if f {
                 col[d] = 0.0;
             }
         }
-        effective.solve_in_place(rhs.as_mut());
-        u_next.copy_from_slice(rhs.col_as_slice(0));
-        for (s, values) in sources.iter().zip(&forces) {
+        self.effective.solve_in_place(self.rhs.as_mut());
+        u_next.copy_from_slice(self.rhs.col_as_slice(0));
+        for (weights, values) in self.sources.iter() {
             let f = 0.5 * (values[step] + values[step + 1]);
-            flows.source_work += f * s
-                .weights
+            self.flows.source_work += f * weights
                 .iter()
                 .map(|&(d, w)| w * (u_next[d] - u[d]))
                 .sum::<f64>();
         }
-        for d in 0..n {
+        let v_next = &mut self.v_next;
+        for d in 0..u.len() {
             let a_next = c1 * (u_next[d] - u[d]) - c2 * v[d] - a[d];
-            let v_next = v[d] + 0.5 * dt * (a[d] + a_next);
+            v_next[d] = v[d] + 0.5 * dt * (a[d] + a_next);
             a[d] = a_next;
-            work[d] = v_next;
         }
-        for &(d, c) in &model.dashpots {
-            flows.dashpot_loss += c * (u_next[d] - u[d]) * 0.5 * (v[d] + work[d]);
+        for &(d, c) in &self.model.dashpots {
+            self.flows.dashpot_loss += c * (u_next[d] - u[d]) * 0.5 * (v[d] + v_next[d]);
         }
-        std::mem::swap(&mut v, &mut work);
-        std::mem::swap(&mut u, &mut u_next);
-        if step % super::progress::REPORT_EVERY == 0 {
-            progress(step);
-        }
+        Ok(())
     }
-    sample(
-        model,
-        &mass,
-        steps,
-        dt,
-        &u,
-        &v,
-        &mut work,
-        &mut ledger,
-        &flows,
-        stab.dt_crit_s,
-    )?;
-    drop(progress);
-    let report = RunReport {
-        integrator: format!(
-            "Newmark average acceleration ({} mass)",
-            if consistent_mass {
-                "consistent"
-            } else {
-                "lumped"
-            }
-        ),
-        wall_time_s: clock.elapsed().as_secs_f64(),
-        setup_time_s,
-        steps,
-        dofs: n,
-        dt_s: dt,
-        dt_crit_s: stab.dt_crit_s,
-        stability_ratio: dt / stab.dt_crit_s,
-        energy_residual: ledger.final_residual(),
-        energy_residual_peak: ledger.peak_residual(),
-        source_work_j: flows.source_work,
-        contact: None,
-    };
-    Ok(RunOutput {
-        report,
-        traces: traces
-            .into_iter()
-            .map(|t| Signal {
-                dt_s: dt,
-                t0_s: 0.0,
-                samples: t,
-            })
-            .collect(),
-        receiver_names: receivers.iter().map(|r| r.name.clone()).collect(),
-        crack: None,
-        contact_series: None,
-        snapshots,
-        ledger,
-    })
-}
 
-/// 1/2 v^T M v + 1/2 u^T K u.
-fn energy(model: &Model, mass: &Mass, u: &[f64], v: &[f64], work: &mut [f64]) -> f64 {
-    mass.mul(v, work);
-    let kinetic: f64 = v.iter().zip(work.iter()).map(|(a, b)| a * b).sum();
-    model.stiffness.mul(u, work);
-    let strain: f64 = u.iter().zip(work.iter()).map(|(a, b)| a * b).sum();
-    0.5 * (kinetic + strain)
-}
-
-#[allow(clippy::too_many_arguments)]
-fn sample(
-    model: &Model,
-    mass: &Mass,
-    step: usize,
-    dt: f64,
-    u: &[f64],
-    v: &[f64],
-    work: &mut [f64],
-    ledger: &mut EnergyLedger,
-    flows: &Flows,
-    dt_crit: f64,
-) -> Result<()> {
-    mass.mul(v, work);
-    let kinetic = 0.5 * v.iter().zip(work.iter()).map(|(a, b)| a * b).sum::<f64>();
-    model.stiffness.mul(u, work);
-    let strain = 0.5 * u.iter().zip(work.iter()).map(|(a, b)| a * b).sum::<f64>();
-    if !(kinetic.is_finite() && strain.is_finite()) {
-        return Err(Error::Unstable {
+    fn fields(&self, step: usize) -> Fields<'_> {
+        Fields {
             step,
-            time_s: step as f64 * dt,
-            reason: "non-finite energy".into(),
-            dt_s: dt,
-            dt_crit_s: dt_crit,
-        });
+            dt_s: self.dt,
+            displacement: &self.u,
+            velocity: Velocity::Nodal(&self.v),
+        }
     }
-    ledger.push(step as f64 * dt, kinetic, strain, flows);
-    Ok(())
+
+    fn commit(&mut self) {
+        std::mem::swap(&mut self.v, &mut self.v_next);
+        std::mem::swap(&mut self.u, &mut self.u_next);
+    }
+
+    /// 1/2 v^T M v + 1/2 u^T K u at t_n, which the scheme conserves without damping and forces.
+    fn energy(&mut self, step: usize) -> EnergySample {
+        let (u, v, work) = (&self.u, &self.v, &mut self.work);
+        self.mass.mul(v, work);
+        let kinetic = 0.5 * v.iter().zip(work.iter()).map(|(a, b)| a * b).sum::<f64>();
+        self.model.stiffness.mul(u, work);
+        let strain = 0.5 * u.iter().zip(work.iter()).map(|(a, b)| a * b).sum::<f64>();
+        EnergySample {
+            time_s: step as f64 * self.dt,
+            kinetic_j: kinetic,
+            strain_j: strain,
+            flows: self.flows,
+        }
+    }
 }
