@@ -522,7 +522,7 @@ fn main() {
             signal: force,
         }];
         let receivers = [plain_scene.receivers[2].clone()];
-        let contact = cracked_scene.contact;
+        let contact = cracked_scene.contact();
         let fraction = |m: &Model| StiffnessOperator::new(m).stencil_fraction();
         let (fc, fp) = (fraction(cracked), fraction(plain));
         println!(

@@ -11,8 +11,8 @@ use crate::material::{Orthotropic, Plane};
 use crate::mesh::{Mesh, Side};
 use crate::signal::Signal;
 use crate::solve::{
-    self, point_receiver, segment_receiver, segment_shares, traction_source, Integrator, Quantity,
-    Receiver, RunConfig, RunOutput, StabilityEstimate,
+    self, point_receiver, segment_receiver, segment_shares, traction_source, Quantity, Receiver,
+    RunConfig, RunOutput, StabilityEstimate,
 };
 use crate::transducer::TransducerSpec;
 use serde::{Deserialize, Serialize};
@@ -330,6 +330,37 @@ pub enum Absorber {
     },
 }
 
+/// The resolution presets of the experiments: the scene ([`SceneSpec::preset`]) and the
+/// TR-NEWS timings ([`crate::trnews::TrNewsSpec::preset`]) that go with it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Resolution {
+    /// The report's scene on a mesh that runs in minutes (the default).
+    Quick,
+    /// The report's scene at the report's element size (20 um x 10 um; hours).
+    Paper,
+    /// A small, fast scene with short signals, for tests and CI.
+    Smoke,
+}
+
+impl std::str::FromStr for Resolution {
+    type Err = Error;
+
+    /// `quick`, `paper` or `smoke`; anything else is refused, naming the value.
+    fn from_str(name: &str) -> Result<Resolution> {
+        match name {
+            "quick" => Ok(Resolution::Quick),
+            "paper" => Ok(Resolution::Paper),
+            "smoke" => Ok(Resolution::Smoke),
+            other => Err(Error::invalid(
+                "resolution",
+                other,
+                "expected quick, paper or smoke",
+            )),
+        }
+    }
+}
+
 /// A horizontal crack with contacting faces (report Sec. 4.9).
 ///
 /// The crack never changes the discretisation: the mesh is the one built without it, the
@@ -475,17 +506,12 @@ impl SceneSpec {
         }
     }
 
-    /// A preset by name: `quick` (the default), `paper` or `smoke`.
-    pub fn preset(name: &str) -> Result<SceneSpec> {
-        match name {
-            "quick" => Ok(SceneSpec::default()),
-            "paper" => Ok(SceneSpec::paper()),
-            "smoke" => Ok(SceneSpec::smoke()),
-            other => Err(Error::invalid(
-                "resolution",
-                other,
-                "expected quick, paper or smoke",
-            )),
+    /// The scene of a resolution preset.
+    pub fn preset(resolution: Resolution) -> SceneSpec {
+        match resolution {
+            Resolution::Quick => SceneSpec::default(),
+            Resolution::Paper => SceneSpec::paper(),
+            Resolution::Smoke => SceneSpec::smoke(),
         }
     }
 
@@ -541,8 +567,6 @@ pub struct Scene {
     pub transmitter: Vec<(usize, f64)>,
     /// Receivers 1..n.
     pub receivers: Vec<Receiver>,
-    /// Contact options of the crack (None: no crack, an open crack, or tied faces).
-    pub contact: Option<ContactOptions>,
     /// Where the crack was put on the mesh, requested vs used (None without a crack).
     pub crack_placement: Option<CrackPlacement>,
     /// Explicit stability estimate, computed once.
@@ -766,14 +790,6 @@ impl Scene {
             source_weights(&mesh, &spec.sources)?
         };
         let receivers = build_receivers(&mesh, &spec.receivers, region.y0 + region.height)?;
-        let contact = match &spec.gmsh {
-            None => spec
-                .crack
-                .as_ref()
-                .filter(|c| !c.tied)
-                .and_then(|c| c.contact),
-            Some(g) => g.crack_line.filter(|_| !g.tied).and(g.contact),
-        };
         let absorbing = absorbing_edges(spec, &conditions, &mesh, region)?;
         let mut model = Model::build(mesh, laminate.materials.clone(), &absorbing, fixed, crack)?;
         // The stability estimate below is the untied model's: tying restricts it to the
@@ -801,7 +817,6 @@ impl Scene {
             model,
             transmitter,
             receivers,
-            contact,
             crack_placement,
             stability,
         })
@@ -809,14 +824,28 @@ impl Scene {
 
     /// True when the scene is linear time-invariant: no crack, or a crack without contact.
     pub fn is_linear(&self) -> bool {
-        self.model.crack.is_none() || self.contact.is_none()
+        self.model.crack.is_none() || self.contact().is_none()
+    }
+
+    /// The contact options of the scene's crack, as its spec gives them (None: no crack, an
+    /// open crack, or tied faces).
+    pub fn contact(&self) -> Option<ContactOptions> {
+        match &self.spec.gmsh {
+            None => self
+                .spec
+                .crack
+                .as_ref()
+                .filter(|c| !c.tied)
+                .and_then(|c| c.contact),
+            Some(g) => g.crack_line.filter(|_| !g.tied).and(g.contact),
+        }
     }
 
     /// A run configuration for this scene: its contact options and stability estimate.
     pub fn run_config(&self, duration_s: f64) -> RunConfig {
         RunConfig {
             duration_s,
-            contact: self.contact,
+            contact: self.contact(),
             stability: Some(self.stability),
             ..Default::default()
         }
@@ -859,7 +888,11 @@ impl Scene {
             weights: self.transmitter.clone(),
             signal: traction.clone(),
         };
-        let out = solve::run(&self.model, &[source], &self.receivers, config)?;
+        let config = RunConfig {
+            stability: config.stability.or(Some(self.stability)),
+            ..config.clone()
+        };
+        let out = solve::run(&self.model, &[source], &self.receivers, &config)?;
         let drive_max = traction.max_abs();
         if drive_max > 0.0
             && out.report.source_work_j == 0.0
@@ -1538,65 +1571,4 @@ fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Rec
         receivers.push(receiver);
     }
     Ok(receivers)
-}
-
-/// Options of one transmission (a run of the scene), as scripts give them.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct TransmitOptions {
-    /// Simulated duration (s).
-    pub duration_s: f64,
-    /// Time step (s); `None` takes 0.9 dt_crit. Newmark needs one.
-    pub dt_s: Option<f64>,
-    /// Integrator: `#{kind: "explicit"}` or `#{kind: "newmark", consistent_mass: true}`.
-    pub integrator: Integrator,
-    /// Run even above the explicit stability limit (to study instability).
-    pub force: bool,
-    /// Energy-ledger sampling interval (steps).
-    pub ledger_every: usize,
-    /// Take a displacement snapshot every this many steps.
-    pub snapshot_every: Option<usize>,
-    /// Stream the snapshots as .npy files into this directory instead of keeping them.
-    pub snapshot_dir: Option<std::path::PathBuf>,
-    /// Record the crack faces.
-    pub record_crack: bool,
-    /// Override the scene's contact options for this run (`None` keeps the scene's).
-    pub contact: Option<ContactOptions>,
-    /// Report progress (shown as a bar by the script host unless `--quiet`).
-    pub progress: bool,
-}
-
-impl Default for TransmitOptions {
-    fn default() -> Self {
-        TransmitOptions {
-            duration_s: 60e-6,
-            dt_s: None,
-            integrator: Integrator::Explicit,
-            force: false,
-            ledger_every: 20,
-            snapshot_every: None,
-            snapshot_dir: None,
-            record_crack: false,
-            contact: None,
-            progress: true,
-        }
-    }
-}
-
-impl Scene {
-    /// The run configuration for `options`.
-    pub fn config(&self, options: &TransmitOptions) -> RunConfig {
-        RunConfig {
-            dt_s: options.dt_s,
-            integrator: options.integrator,
-            force: options.force,
-            ledger_every: options.ledger_every,
-            snapshot_every: options.snapshot_every,
-            snapshot_dir: options.snapshot_dir.clone(),
-            record_crack: options.record_crack,
-            contact: options.contact.or(self.contact),
-            progress: options.progress,
-            ..self.run_config(options.duration_s)
-        }
-    }
 }

@@ -239,15 +239,7 @@ pub fn resolution_for_tolerance(
     let pilot = |factor: f64| -> Result<(Vec<Signal>, f64)> {
         let scene = Arc::new(Scene::build(&spec.coarsened(factor)?.uncracked())?);
         let r = Responder::new(scene, chirp.record_s + 1e-6)?;
-        let c = crate::signal::chirp(
-            chirp.f0_hz,
-            chirp.f1_hz,
-            chirp.chirp_s,
-            chirp.signal_s,
-            r.dt_s(),
-            spec.transmitter.peak_pa,
-            chirp.taper,
-        )?;
+        let c = chirp.chirp.signal(r.dt_s(), spec.transmitter.peak_pa)?;
         let time = r.impulse_report().map_or(0.0, |rep| rep.wall_time_s);
         Ok((r.respond(&c, chirp.record_s)?.traces, time))
     };

@@ -16,8 +16,8 @@
 
 use crate::accuracy::{Estimate, T3_ORDER};
 use crate::error::{Error, Result};
-use crate::scene::Scene;
-use crate::signal::{self, Peak, SideLobes, Signal};
+use crate::scene::{Resolution, Scene};
+use crate::signal::{self, ChirpSpec, Peak, SideLobes, Signal};
 use crate::solve::RunReport;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -570,16 +570,9 @@ fn truncate(s: Signal, n: usize) -> Signal {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TrNewsSpec {
-    /// Chirp start frequency (report: 0.2 MHz).
-    pub f0_hz: f64,
-    /// Chirp end frequency (report: 2 MHz).
-    pub f1_hz: f64,
-    /// Chirp length t1 (report: 30 us).
-    pub chirp_s: f64,
-    /// Length of the transmitted chirp signal, zero after t1 (report: 60 us).
-    pub signal_s: f64,
-    /// Tukey taper fraction of the chirp (0: none).
-    pub taper: f64,
+    /// The transmitted chirp (report: 0.2 -> 2 MHz over 30 us in 60 us), at the transmitter's
+    /// peak traction.
+    pub chirp: ChirpSpec,
     /// Duration T of the recorded coda response y (s).
     pub record_s: f64,
     /// Lag window [0, window_s] of the correlation Gamma; the time-reversed Gamma focuses at
@@ -598,11 +591,7 @@ pub struct TrNewsSpec {
 impl Default for TrNewsSpec {
     fn default() -> Self {
         TrNewsSpec {
-            f0_hz: 0.2e6,
-            f1_hz: 2e6,
-            chirp_s: 30e-6,
-            signal_s: 60e-6,
-            taper: 0.0,
+            chirp: ChirpSpec::default(),
             record_s: 60e-6,
             window_s: 60e-6,
             after_focus_s: 30e-6,
@@ -689,8 +678,11 @@ impl TrNewsSpec {
     /// Shorter signals for the `smoke` scene: a 10 us chirp in 15 us, 20 us records and window.
     pub fn smoke() -> TrNewsSpec {
         TrNewsSpec {
-            chirp_s: 10e-6,
-            signal_s: 15e-6,
+            chirp: ChirpSpec {
+                t1_s: 10e-6,
+                total_s: 15e-6,
+                ..ChirpSpec::default()
+            },
             record_s: 20e-6,
             window_s: 20e-6,
             after_focus_s: 10e-6,
@@ -698,12 +690,12 @@ impl TrNewsSpec {
         }
     }
 
-    /// A preset by name: `smoke` for the smoke scene, the report's values otherwise.
-    pub fn preset(name: &str) -> TrNewsSpec {
-        if name == "smoke" {
-            Self::smoke()
-        } else {
-            Self::default()
+    /// The timings that go with a resolution preset: short signals for `smoke`, the
+    /// report's otherwise (the mesh changes with the resolution, the experiment does not).
+    pub fn preset(resolution: Resolution) -> TrNewsSpec {
+        match resolution {
+            Resolution::Smoke => Self::smoke(),
+            Resolution::Quick | Resolution::Paper => Self::default(),
         }
     }
 
@@ -804,16 +796,12 @@ fn spec_field(e: Error, names: &[(&str, &str)]) -> Error {
 
 fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
     let peak_pa = responder.peak_drive();
-    let chirp = signal::chirp(
-        spec.f0_hz,
-        spec.f1_hz,
-        spec.chirp_s,
-        spec.signal_s,
-        responder.dt_s,
-        peak_pa,
-        spec.taper,
-    )
-    .map_err(|e| spec_field(e.into(), &[("t1_s", "chirp_s"), ("total_s", "signal_s")]))?;
+    let chirp = spec.chirp.signal(responder.dt_s, peak_pa).map_err(|e| {
+        spec_field(
+            e.into(),
+            &[("t1_s", "chirp.t1_s"), ("total_s", "chirp.total_s")],
+        )
+    })?;
     let first = responder
         .respond(&chirp, spec.record_s)
         .map_err(|e| spec_field(e, &[("duration_s", "record_s")]))?;

@@ -97,9 +97,9 @@ fn crack_snaps_to_the_nearest_mesh_lines_and_reports_them() {
     assert!(within_half(&grid.x_m, p.x1_requested_m, p.x1_used_m));
     assert!(!p.tied);
     let tied = Scene::build(&spec.uncracked()).unwrap();
-    let q = tied.crack_placement.unwrap();
+    let q = tied.crack_placement.clone().unwrap();
     assert!(q.tied && q.depth_used_m == p.depth_used_m && q.x0_used_m == p.x0_used_m);
-    assert!(tied.contact.is_none());
+    assert!(tied.contact().is_none());
 }
 
 fn error_of(crack: CrackSpec) -> String {

@@ -236,8 +236,12 @@ fn low_band_convergence_and_tail(absorber: Absorber, fix: bool) -> Vec<(f64, f64
     let duration = 150e-6;
     let low_band = |h: f64| {
         let scene = Scene::build(&block(h, absorber, fix)).unwrap();
-        let drive =
-            signal::chirp(0.2e6, 2e6, 10e-6, 10e-6, scene.default_dt_s(), 50e3, 0.0).unwrap();
+        let chirp = signal::ChirpSpec {
+            t1_s: 10e-6,
+            total_s: 10e-6,
+            ..Default::default()
+        };
+        let drive = chirp.signal(scene.default_dt_s(), 50e3).unwrap();
         let out = scene.transmit(&drive, &scene.run_config(duration)).unwrap();
         let lp = signal::butterworth(4, FilterKind::LowPass(0.2e6), 1.0 / 20e-9).unwrap();
         out.traces

@@ -162,16 +162,7 @@ fn a_requested_tolerance_is_met_on_a_homogeneous_block() {
     assert!(choice.predicted_error <= tolerance && choice.size_factor < 1.0);
     let response = |s: &SceneSpec| {
         let r = Responder::new(Arc::new(Scene::build(s).unwrap()), chirp.record_s + 1e-6).unwrap();
-        let c = trnews::signal::chirp(
-            chirp.f0_hz,
-            chirp.f1_hz,
-            chirp.chirp_s,
-            chirp.signal_s,
-            r.dt_s(),
-            50e3,
-            0.0,
-        )
-        .unwrap();
+        let c = chirp.chirp.signal(r.dt_s(), 50e3).unwrap();
         r.respond(&c, chirp.record_s).unwrap().traces
     };
     let (run, reference) = (

@@ -9,9 +9,10 @@ use trnews::material::{Material, Plane};
 use trnews::mesh::Side;
 use trnews::scene::{
     Absorber, EdgeCondition, EdgeConditions, GmshSpec, LaminateSpec, LayerSpec, MaterialSpec,
-    ReceiverAt, ReceiverSpec, Scene, SceneSpec, SourceSpec, TransmitOptions,
+    ReceiverAt, ReceiverSpec, Scene, SceneSpec, SourceSpec,
 };
 use trnews::signal::Signal;
+use trnews::solve::RunConfig;
 
 /// The stack, top first: 0.6 mm 0/90 fabric, 0.3 mm epoxy, 0.6 mm fabric (1.5 mm).
 const LAYERS: [(&str, f64); 3] = [
@@ -131,13 +132,12 @@ fn run_pulse(
         t0_s: 0.0,
         samples: (0..n).map(|k| ricker(k as f64 * dt, pulse)).collect(),
     };
-    let options = TransmitOptions {
-        duration_s: duration,
+    let config = RunConfig {
         dt_s: Some(dt),
         progress: false,
-        ..Default::default()
+        ..scene.run_config(duration)
     };
-    let out = scene.transmit(&drive, &scene.config(&options)).unwrap();
+    let out = scene.transmit(&drive, &config).unwrap();
     (dt, out.traces)
 }
 
@@ -445,14 +445,13 @@ fn a_periodic_cell_responds_like_the_middle_of_a_row_of_its_copies() {
             })
             .collect(),
     };
-    let options = TransmitOptions {
-        duration_s: duration,
+    let config = |scene: &Scene| RunConfig {
         dt_s: Some(dt),
         progress: false,
-        ..Default::default()
+        ..scene.run_config(duration)
     };
-    let tp = p.transmit(&drive, &p.config(&options)).unwrap().traces;
-    let tr = r.transmit(&drive, &r.config(&options)).unwrap().traces;
+    let tp = p.transmit(&drive, &config(&p)).unwrap().traces;
+    let tr = r.transmit(&drive, &config(&r)).unwrap().traces;
     for (k, (a, b)) in tp.iter().zip(&tr).enumerate() {
         let d = relative_error(&a.samples, &b.samples);
         eprintln!("receiver {}: periodic cell vs middle copy {d:.3e}", k + 1);

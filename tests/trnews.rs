@@ -34,7 +34,10 @@ fn impulse_response_convolution_equals_direct_simulation() {
     let scene = small(false);
     let convolving = Responder::new(scene.clone(), 25e-6).unwrap();
     let simulating = Responder::simulating(scene.clone());
-    let chirp = signal::chirp(0.2e6, 2e6, 10e-6, 15e-6, convolving.dt_s(), 50e3, 0.0).unwrap();
+    let chirp = TrNewsSpec::smoke()
+        .chirp
+        .signal(convolving.dt_s(), 50e3)
+        .unwrap();
     let a = convolving.respond(&chirp, 20e-6).unwrap();
     let b = simulating.respond(&chirp, 20e-6).unwrap();
     let err = max_rel_diff(&a.traces, &b.traces);
@@ -120,8 +123,7 @@ fn cracked_scene_breaks_linearity_clearly() {
 
 #[test]
 fn pulse_inversion_cancels_only_without_a_closing_crack() {
-    let chirp_for =
-        |r: &Responder| signal::chirp(0.2e6, 2e6, 10e-6, 15e-6, r.dt_s(), 50e3, 0.0).unwrap();
+    let chirp_for = |r: &Responder| TrNewsSpec::smoke().chirp.signal(r.dt_s(), 50e3).unwrap();
     let scene = small(false);
     let r = Responder::simulating(scene.clone());
     let pi = pulse_inversion(&r, &chirp_for(&r), 15e-6).unwrap();

@@ -76,9 +76,10 @@ pub fn index(ctx: &NativeCallContext, k: rhai::INT, len: usize, what: &str) -> S
 #[export_module]
 mod scene_api {
     use super::{index, RunRef, SceneRef};
-    use crate::scene::{SceneSpec, TransmitOptions};
-    use crate::script::convert::{options, to_dynamic, WithPosition};
+    use crate::scene::SceneSpec;
+    use crate::script::convert::{options, overlay, to_dynamic, WithPosition};
     use crate::signal::Signal;
+    use crate::solve::RunConfig;
     use rhai::{Array, Dynamic, Map, NativeCallContext, FLOAT, INT};
     use std::sync::Arc;
 
@@ -99,7 +100,7 @@ mod scene_api {
     /// Builds a preset scene, "quick" (the default), "paper" (20 um x 10 um elements) or "smoke" (a small fast scene for tests), with `overrides`.
     #[rhai_fn(return_raw)]
     pub fn preset(ctx: NativeCallContext, name: &str, overrides: Map) -> Res<SceneRef> {
-        let base = SceneSpec::preset(name).at(&ctx)?;
+        let base = SceneSpec::preset(name.parse().at(&ctx)?);
         super::build(&ctx, overrides, base)
     }
 
@@ -198,7 +199,7 @@ mod scene_api {
         Ok(m.into())
     }
 
-    /// Transmits `traction` (Pa) from the transmitter with run options #{duration_s, dt_s, integrator, force, ledger_every, snapshot_every, snapshot_dir (under the output directory), record_crack, contact, progress}; returns the Run.
+    /// Transmits `traction` (Pa) from the transmitter with run options #{duration_s, dt_s, step_safety, integrator, force, ledger_every, snapshot_every, snapshot_dir (under the output directory), record_crack, contact (laid over the scene's; () opens the crack), progress}; returns the Run.
     #[rhai_fn(global, pure, return_raw)]
     pub fn transmit(
         ctx: NativeCallContext,
@@ -206,8 +207,8 @@ mod scene_api {
         traction: Signal,
         run_options: Map,
     ) -> Res<RunRef> {
-        let mut o: TransmitOptions =
-            options(&ctx, run_options, &TransmitOptions::default(), "run")?;
+        let base = scene.run_config(RunConfig::default().duration_s);
+        let mut o: RunConfig = overlay(&ctx, run_options, &base, "run")?;
         if let Some(dir) = &o.snapshot_dir {
             // resolve a file inside the directory: checks the sandbox and creates it
             let host = crate::script::HostContext::of(&ctx)?;
@@ -216,9 +217,7 @@ mod scene_api {
                 .map_err(|e| super::error(&ctx, e))?;
             o.snapshot_dir = resolved.parent().map(|p| p.to_path_buf());
         }
-        Ok(Arc::new(
-            scene.transmit(&traction, &scene.config(&o)).at(&ctx)?,
-        ))
+        Ok(Arc::new(scene.transmit(&traction, &o).at(&ctx)?))
     }
 
     /// Traces of every receiver, in order (array of Signal).

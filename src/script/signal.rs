@@ -2,8 +2,8 @@
 //! `crate::signal`. Samples stay in Rust; scripts call vectorised methods.
 
 use crate::script::convert::{error, ScriptResult, WithPosition};
+use crate::signal::{ChirpSpec, Signal, Spectrum};
 use crate::signal::{FilterKind, Window};
-use crate::signal::{Signal, Spectrum};
 use rhai::plugin::*;
 use rhai::{Engine, Module, NativeCallContext, INT};
 use serde::{Deserialize, Serialize};
@@ -20,29 +20,23 @@ pub fn module() -> Module {
     exported_module!(signal_api)
 }
 
-/// Options of `signal::chirp(#{...})`; the defaults are the report's excitation.
+/// Options of `signal::chirp(#{...})`: the chirp (the report's excitation unless given), its
+/// sample step and amplitude.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(default)]
 struct ChirpOptions {
-    f0_hz: f64,
-    f1_hz: f64,
-    t1_s: f64,
-    total_s: f64,
+    #[serde(flatten)]
+    chirp: ChirpSpec,
     dt_s: f64,
     amplitude: f64,
-    taper_fraction: f64,
 }
 
 impl Default for ChirpOptions {
     fn default() -> Self {
         ChirpOptions {
-            f0_hz: 0.2e6,
-            f1_hz: 2.0e6,
-            t1_s: 30e-6,
-            total_s: 60e-6,
+            chirp: ChirpSpec::default(),
             dt_s: 5e-9,
             amplitude: 1.0,
-            taper_fraction: 0.0,
         }
     }
 }
@@ -96,16 +90,7 @@ mod signal_api {
     #[rhai_fn(return_raw)]
     pub fn chirp(ctx: NativeCallContext, opts: Map) -> Res<Signal> {
         let o: ChirpOptions = options(&ctx, opts, &ChirpOptions::default(), "chirp")?;
-        sig::chirp(
-            o.f0_hz,
-            o.f1_hz,
-            o.t1_s,
-            o.total_s,
-            o.dt_s,
-            o.amplitude,
-            o.taper_fraction,
-        )
-        .at(&ctx)
+        o.chirp.signal(o.dt_s, o.amplitude).at(&ctx)
     }
 
     /// Linear chirp f0_hz -> f1_hz over t1_s inside total_s, sampled at dt_s, amplitude 1, no taper.
@@ -118,7 +103,14 @@ mod signal_api {
         total_s: FLOAT,
         dt_s: FLOAT,
     ) -> Res<Signal> {
-        sig::chirp(f0_hz, f1_hz, t1_s, total_s, dt_s, 1.0, 0.0).at(&ctx)
+        let chirp = sig::ChirpSpec {
+            f0_hz,
+            f1_hz,
+            t1_s,
+            total_s,
+            taper_fraction: 0.0,
+        };
+        chirp.signal(dt_s, 1.0).at(&ctx)
     }
 
     /// A signal from an array of numbers: sample k at t0_s + k dt_s.

@@ -377,16 +377,16 @@ mod trnews_api {
 
     type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
 
-    /// The report's TR-NEWS parameters #{f0_hz, f1_hz, chirp_s, signal_s, taper, record_s, window_s, after_focus_s, receivers, pulse_inversion, main_lobe_half_width_s}.
+    /// The report's TR-NEWS parameters #{chirp: #{f0_hz, f1_hz, t1_s, total_s, taper_fraction}, record_s, window_s, after_focus_s, receivers, pulse_inversion, main_lobe_half_width_s}.
     #[rhai_fn(return_raw)]
     pub fn default_spec(ctx: NativeCallContext) -> Res<Dynamic> {
         to_dynamic(&ctx, &TrNewsSpec::default())
     }
 
-    /// TR-NEWS parameters of a preset: "smoke" (10 us chirp, 20 us window) or the report's for any other name.
+    /// TR-NEWS parameters of a resolution preset: "smoke" (10 us chirp, 20 us window), "quick" or "paper" (the report's); any other name is an error.
     #[rhai_fn(return_raw)]
     pub fn preset_spec(ctx: NativeCallContext, name: &str) -> Res<Dynamic> {
-        to_dynamic(&ctx, &TrNewsSpec::preset(name))
+        to_dynamic(&ctx, &TrNewsSpec::preset(name.parse().at(&ctx)?))
     }
 
     /// Duration of a focusing run for a TR-NEWS spec map: window_s + after_focus_s (s).

@@ -2,61 +2,92 @@
 
 use std::f64::consts::PI;
 
+use serde::{Deserialize, Serialize};
+
 use super::{check_alloc, finite, positive_finite, Signal, SignalError, GRID_TOL};
 
-/// Linear chirp from `f0_hz` to `f1_hz` over `[0, t1_s]`, zero after, sampled at
-/// `t_k = k dt_s` for `k < round(total_s / dt_s)`:
-///
-/// `psi(t) = 2 pi (f0 t + (f1 - f0) t^2 / (2 t1))`, `c(t) = A w(t) sin(psi(t))`
-/// for `0 <= t <= t1`, so the instantaneous frequency runs linearly from f0 to f1.
-///
-/// `w` is a Tukey taper: `taper_fraction` (in [0, 1]) of `t1` is tapered, half at
-/// each end, with `w = (1 - cos(pi t / r)) / 2` on the rising ramp of length
-/// `r = taper_fraction t1 / 2` (mirrored at the end); 0 means no taper.
-/// Both frequencies must be below the Nyquist frequency `1 / (2 dt_s)`.
-pub fn chirp(
-    f0_hz: f64,
-    f1_hz: f64,
-    t1_s: f64,
-    total_s: f64,
-    dt_s: f64,
-    amplitude: f64,
-    taper_fraction: f64,
-) -> Result<Signal, SignalError> {
-    positive_finite("dt_s", dt_s)?;
-    positive_finite("t1_s", t1_s)?;
-    finite("amplitude", amplitude)?;
-    check_frequency("f0_hz", f0_hz, dt_s)?;
-    check_frequency("f1_hz", f1_hz, dt_s)?;
-    if !(total_s.is_finite() && total_s >= t1_s) {
-        return Err(SignalError::InvalidParameter {
-            name: "total_s",
-            requirement: "finite and at least t1_s",
-            value: total_s,
-        });
+/// A linear chirp (report eq 6, corrected): the one parameter set of the excitation, used by
+/// TR-NEWS ([`crate::trnews::TrNewsSpec`]), the resolution pilots and scripts. `Default` is the
+/// report's: 0.2 -> 2 MHz over t1 = 30 us, in a 60 us signal, no taper.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ChirpSpec {
+    /// Start frequency f0 (Hz).
+    pub f0_hz: f64,
+    /// End frequency f1 (Hz).
+    pub f1_hz: f64,
+    /// Sweep duration t1 (s).
+    pub t1_s: f64,
+    /// Length of the signal, zero after t1 (s).
+    pub total_s: f64,
+    /// Fraction of t1 tapered (Tukey), in [0, 1]; 0: none.
+    pub taper_fraction: f64,
+}
+
+impl Default for ChirpSpec {
+    fn default() -> Self {
+        ChirpSpec {
+            f0_hz: 0.2e6,
+            f1_hz: 2e6,
+            t1_s: 30e-6,
+            total_s: 60e-6,
+            taper_fraction: 0.0,
+        }
     }
-    if !(0.0..=1.0).contains(&taper_fraction) {
-        return Err(SignalError::InvalidParameter {
-            name: "taper_fraction",
-            requirement: "in [0, 1]",
-            value: taper_fraction,
-        });
+}
+
+impl ChirpSpec {
+    /// The chirp sampled at `t_k = k dt_s` for `k < round(total_s / dt_s)`:
+    ///
+    /// `psi(t) = 2 pi (f0 t + (f1 - f0) t^2 / (2 t1))`, `c(t) = A w(t) sin(psi(t))`
+    /// for `0 <= t <= t1`, zero after, so the instantaneous frequency runs linearly from f0
+    /// to f1. `w` is a Tukey taper: `taper_fraction` of `t1` is tapered, half at each end,
+    /// with `w = (1 - cos(pi t / r)) / 2` on the rising ramp of length
+    /// `r = taper_fraction t1 / 2` (mirrored at the end). Both frequencies must be below the
+    /// Nyquist frequency `1 / (2 dt_s)`.
+    pub fn signal(&self, dt_s: f64, amplitude: f64) -> Result<Signal, SignalError> {
+        let ChirpSpec {
+            f0_hz,
+            f1_hz,
+            t1_s,
+            total_s,
+            taper_fraction,
+        } = *self;
+        positive_finite("dt_s", dt_s)?;
+        positive_finite("t1_s", t1_s)?;
+        finite("amplitude", amplitude)?;
+        check_frequency("f0_hz", f0_hz, dt_s)?;
+        check_frequency("f1_hz", f1_hz, dt_s)?;
+        if !(total_s.is_finite() && total_s >= t1_s) {
+            return Err(SignalError::InvalidParameter {
+                name: "total_s",
+                requirement: "finite and at least t1_s",
+                value: total_s,
+            });
+        }
+        if !(0.0..=1.0).contains(&taper_fraction) {
+            return Err(SignalError::InvalidParameter {
+                name: "taper_fraction",
+                requirement: "in [0, 1]",
+                value: taper_fraction,
+            });
+        }
+        let n = (total_s / dt_s).round();
+        check_alloc("chirp", n)?;
+        let ramp_s = 0.5 * taper_fraction * t1_s;
+        let t_last = t1_s + GRID_TOL * dt_s;
+        let samples = (0..n as usize)
+            .map(|k| {
+                let t = k as f64 * dt_s;
+                if t > t_last {
+                    return 0.0;
+                }
+                let psi = 2.0 * PI * (f0_hz * t + (f1_hz - f0_hz) * t * t / (2.0 * t1_s));
+                amplitude * tukey(t.min(t1_s), t1_s, ramp_s) * psi.sin()
+            })
+            .collect();
+        Signal::new(dt_s, 0.0, samples)
     }
-    let n = (total_s / dt_s).round();
-    check_alloc("chirp", n)?;
-    let ramp_s = 0.5 * taper_fraction * t1_s;
-    let t_last = t1_s + GRID_TOL * dt_s;
-    let samples = (0..n as usize)
-        .map(|k| {
-            let t = k as f64 * dt_s;
-            if t > t_last {
-                return 0.0;
-            }
-            let psi = 2.0 * PI * (f0_hz * t + (f1_hz - f0_hz) * t * t / (2.0 * t1_s));
-            amplitude * tukey(t.min(t1_s), t1_s, ramp_s) * psi.sin()
-        })
-        .collect();
-    Signal::new(dt_s, 0.0, samples)
 }
 
 /// Tukey taper on `[0, t1]` with cosine ramps of length `ramp_s` at both ends.
@@ -91,6 +122,26 @@ mod tests {
     const F1: f64 = 2e6;
     const T1: f64 = 30e-6;
     const DT: f64 = 10e-9;
+
+    /// The chirp of these parameters (the order of report eq 6).
+    fn chirp(
+        f0_hz: f64,
+        f1_hz: f64,
+        t1_s: f64,
+        total_s: f64,
+        dt_s: f64,
+        amplitude: f64,
+        taper_fraction: f64,
+    ) -> Result<Signal, SignalError> {
+        let spec = ChirpSpec {
+            f0_hz,
+            f1_hz,
+            t1_s,
+            total_s,
+            taper_fraction,
+        };
+        spec.signal(dt_s, amplitude)
+    }
 
     /// `(t, f_inst(t))` over the chirp's middle 80%.
     fn middle_frequencies(taper_fraction: f64) -> Vec<(f64, f64)> {

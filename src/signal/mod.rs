@@ -21,7 +21,7 @@ mod measure;
 mod resample;
 mod spectrum;
 
-pub use chirp::chirp;
+pub use chirp::ChirpSpec;
 pub use delay::{delay, delay_and_sum, time_reverse, time_reverse_to_start};
 pub use fft::{convolve, convolve_discrete, xcorr};
 pub use filter::{butterworth, filtfilt, sosfilt, Biquad, FilterKind, Sos};

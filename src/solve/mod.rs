@@ -74,8 +74,11 @@ pub struct Receiver {
     pub quantity: Quantity,
 }
 
-/// Options of one run.
-#[derive(Clone, Debug)]
+/// Options of one run: the one run-options struct of the library and of scripts
+/// (`scene.transmit(drive, #{duration_s, dt_s, ...})`); the fields scripts cannot set are
+/// skipped by serde.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
     /// Time step; `None` takes `step_safety * dt_crit` (explicit) (s).
     pub dt_s: Option<f64>,
@@ -92,19 +95,24 @@ pub struct RunConfig {
     /// Take a displacement snapshot every this many steps.
     pub snapshot_every: Option<usize>,
     /// Stream snapshots to `snapshot_NNNNNNN.npy` files (2 values per node, step number in
-    /// the name) in this directory instead of keeping them in memory.
+    /// the name) in this directory instead of keeping them in memory (scripts: under the
+    /// output directory).
     pub snapshot_dir: Option<std::path::PathBuf>,
     /// Record the crack-face node traces.
     pub record_crack: bool,
     /// Contact on the crack faces; `None` leaves a crack open (faces pass through each other).
     pub contact: Option<ContactOptions>,
     /// Initial displacement (tests: free vibration), zero if `None`.
+    #[serde(skip)]
     pub initial_displacement: Option<Vec<f64>>,
     /// Initial velocity, zero if `None`.
+    #[serde(skip)]
     pub initial_velocity: Option<Vec<f64>>,
     /// Report progress to the installed [`progress::ProgressReporter`], if any.
     pub progress: bool,
-    /// A precomputed stability estimate for this model, to skip the power iteration.
+    /// A precomputed stability estimate for this model, to skip the Lanczos estimate (a
+    /// scene's runs take the scene's).
+    #[serde(skip)]
     pub stability: Option<StabilityEstimate>,
 }
 
