@@ -316,3 +316,146 @@ fn pulse_inversion_runs_on_recorded_lab_data_and_on_a_measured_impulse_response(
         );
     }
 }
+
+/// Every wrong or inapplicable channel parameter stops the script with an error naming the
+/// parameter and the value written (before any scene is built), never a panic or a default.
+#[test]
+fn channel_parameters_are_checked_and_named() {
+    let tmp = TempDir::new("lab-params");
+    let data = tmp.path().join("data");
+    std::fs::create_dir_all(data.join("lab")).expect("lab");
+    std::fs::create_dir_all(data.join("typo")).expect("typo lab");
+    std::fs::write(
+        data.join("typo").join(LAB_MANIFEST),
+        r#"{"recordings": [{"sent": "a.npy", "recieved": "b.npy"}]}"#,
+    )
+    .expect("manifest");
+    let lab = ["--set", "channel=recorded", "--set", "recordings=lab"];
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["--set", "channel=recordd"],
+            r#"invalid channel = "recordd": expected scene, impulse or recorded"#,
+        ),
+        (
+            &lab,
+            "invalid dt_s = (not given): channel = recorded needs it",
+        ),
+        (
+            &[&lab[..], &["--set", "dt_s=-1e-8", "--set", "peak_drive=1"]].concat(),
+            "invalid dt_s = -0.00000001: must be finite and > 0",
+        ),
+        (
+            &[
+                &lab[..],
+                &["--set", "dt_s=1e-8", "--set", "peak_drive=loud"],
+            ]
+            .concat(),
+            "invalid peak_drive = loud: expected a number",
+        ),
+        (
+            &[&lab[..], &["--set", "tolerance=0.05"]].concat(),
+            "invalid tolerance = 0.05: does not apply to channel = recorded",
+        ),
+        (
+            &[&lab[..], &["--set", "impulse=h.npy"]].concat(),
+            "invalid impulse = h.npy: does not apply to channel = recorded",
+        ),
+        (
+            &["--set", "recordings=lab"],
+            "invalid recordings = lab: does not apply to channel = scene",
+        ),
+        (
+            &[
+                "--set",
+                "channel=recorded",
+                "--set",
+                "recordings=nolab",
+                "--set",
+                "dt_s=1e-8",
+                "--set",
+                "peak_drive=1",
+            ],
+            "invalid recordings = nolab: is not a directory under the data directory",
+        ),
+        (
+            &[
+                "--set",
+                "channel=recorded",
+                "--set",
+                "recordings=typo",
+                "--set",
+                "dt_s=1e-8",
+                "--set",
+                "peak_drive=1",
+            ],
+            "unknown field `recieved`",
+        ),
+        (
+            &[
+                "--set",
+                "channel=impulse",
+                "--set",
+                "impulse=none.npy",
+                "--set",
+                "dt_s=1e-8",
+                "--set",
+                "peak_drive=1",
+            ],
+            "none.npy",
+        ),
+    ];
+    for (i, (set, expected)) in cases.iter().enumerate() {
+        let mut args = vec!["--data".to_string(), data.display().to_string()];
+        args.extend(set.iter().map(|s| s.to_string()));
+        let out = tmp.path().join(format!("out{i}"));
+        let e = run("sweep_delays", &out, &args).expect_err(expected);
+        assert!(e.contains(expected), "expected '{expected}' in: {e}");
+    }
+}
+
+/// A lab channel answers a batch only when every drive is recorded: asked for three drives
+/// of which two are new (one is a recorded drive with one more sample: another length never
+/// matches), it lists both in one go, with their record length, and stops naming the count.
+#[test]
+fn a_lab_channel_lists_every_unrecorded_drive_of_a_batch() {
+    let tmp = TempDir::new("lab-batch");
+    let dt = 1e-8;
+    let drive = Signal::new(dt, 0.0, vec![0.0, 1.0, -0.5]).expect("drive");
+    let recording = trnews::trnews::Recording {
+        sent: drive.clone(),
+        received: vec![Signal::new(dt, 0.0, vec![0.25; 40]).expect("trace")],
+    };
+    let list = trnews::lab::ToRecord::new(tmp.path(), None, "LAB").expect("list");
+    let lab = Responder::from_lab(vec![recording], dt, 1.0, "lab".into(), Arc::new(list))
+        .expect("lab channel");
+    let longer = Signal::new(dt, 0.0, vec![0.0, 1.0, -0.5, 0.0]).expect("padded");
+    let other = drive.scale(-1.0).expect("inverse");
+    let answered = lab
+        .respond_all(&[drive.clone()], 30.0 * dt)
+        .expect("recorded");
+    assert_eq!(answered[0].traces[0].samples, vec![0.25; 30]);
+    let e = lab
+        .respond_all(&[drive, longer, other], 30.0 * dt)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("lab: 2 drives are not recorded yet in 'LAB'"),
+        "{e}"
+    );
+    let text = std::fs::read_to_string(tmp.path().join(TO_RECORD_DIR).join(TO_RECORD_MANIFEST));
+    let listed: ToRecordManifest = serde_json::from_str(&text.expect("list")).expect("json");
+    let mut samples: Vec<usize> = listed.drives.iter().map(|d| d.samples).collect();
+    samples.sort();
+    assert_eq!(samples, vec![3, 4]);
+    assert!(listed
+        .drives
+        .iter()
+        .all(|d| d.record_samples == 30 && d.dt_s == dt));
+    for d in &listed.drives {
+        assert!(
+            tmp.path().join(TO_RECORD_DIR).join(&d.sent).exists(),
+            "{}",
+            d.sent
+        );
+    }
+}

@@ -54,6 +54,14 @@ impl Kind {
             Kind::Recorded => "recordings",
         }
     }
+
+    /// What to write for [`Kind::source`].
+    fn usage(self) -> &'static str {
+        match self {
+            Kind::Impulse => "FILE.npy (under --data: one row per receiver)",
+            Kind::Recorded => "DIR (a lab directory under --data)",
+        }
+    }
 }
 
 /// The `--set` parameters of the running script.
@@ -78,23 +86,28 @@ impl Params {
         }
     }
 
-    /// Parameter `name`, which `kind` requires; `what` says what it is.
-    fn required(&self, name: &str, kind: Kind, what: &str) -> Result<Dynamic, String> {
+    /// Parameter `name`, which `kind` requires; `usage` says what to write after `name=`.
+    fn required(&self, name: &str, kind: Kind, usage: &str) -> Result<Dynamic, String> {
         self.0.param(name).cloned().ok_or_else(|| {
             crate::Error::invalid(
                 name,
                 "(not given)",
-                format!("channel = {} needs it: --set {name}={what}", kind.name()),
+                format!("channel = {} needs it: --set {name}={usage}", kind.name()),
             )
             .to_string()
         })
     }
 
     /// The number `name`, which `kind` requires, finite and > 0.
-    fn positive(&self, name: &str, kind: Kind, what: &str) -> Result<f64, String> {
-        let value = self.required(name, kind, what)?;
+    fn positive(&self, name: &str, kind: Kind, usage: &str) -> Result<f64, String> {
+        let value = self.required(name, kind, usage)?;
         let x = number(&value).ok_or_else(|| {
-            crate::Error::invalid(name, &value, format!("expected a number ({what})")).to_string()
+            crate::Error::invalid(
+                name,
+                &value,
+                format!("expected a number: --set {name}={usage}"),
+            )
+            .to_string()
         })?;
         crate::error::require_positive(name, x).map_err(|e| e.to_string())
     }
@@ -147,9 +160,13 @@ fn measured(ctx: &NativeCallContext, params: &Params, kind: Kind) -> ScriptResul
         .refuse(SCENE_ONLY, &setting)
         .and_then(|()| params.refuse(&[other.source()], &setting))
         .and_then(|()| {
-            let source = params.required(kind.source(), kind, "PATH under --data")?;
-            let dt_s = params.positive("dt_s", kind, "the sample step in seconds")?;
-            let peak = params.positive("peak_drive", kind, "the drive's peak amplitude")?;
+            let source = params.required(kind.source(), kind, kind.usage())?;
+            let dt_s = params.positive("dt_s", kind, "SECONDS (the data's sample step)")?;
+            let peak = params.positive(
+                "peak_drive",
+                kind,
+                "AMPLITUDE (the drives' peak, in the drive's unit)",
+            )?;
             Ok((source.to_string(), dt_s, peak))
         });
     let (source, dt_s, peak_drive) = checked.map_err(|m| error(ctx, m))?;
