@@ -431,7 +431,7 @@ fn a_lab_channel_lists_every_unrecorded_drive_of_a_batch() {
     let longer = Signal::new(dt, 0.0, vec![0.0, 1.0, -0.5, 0.0]).expect("padded");
     let other = drive.scale(-1.0).expect("inverse");
     let answered = lab
-        .respond_all(&[drive.clone()], 30.0 * dt)
+        .respond_all(std::slice::from_ref(&drive), 30.0 * dt)
         .expect("recorded");
     assert_eq!(answered[0].traces[0].samples, vec![0.25; 30]);
     let e = lab
