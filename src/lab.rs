@@ -15,7 +15,10 @@
 //! `received` the receivers' traces as a 2-D .npy (one row per receiver, from the drive's
 //! start), both on the channel's step `dt_s`. A drive matches a recording when it has the
 //! same number of samples and a relative L2 difference of at most
-//! [`crate::trnews::RecordedChannel::MATCH`].
+//! [`crate::trnews::RecordedChannel::MATCH`]. A drive on another step is first resampled to
+//! `dt_s` ([`Responder::respond`]); a drive of another length (even one zero-padded) never
+//! matches and is listed to record. A recording longer than asked for is cut; a shorter one
+//! is an error giving the length needed.
 
 use crate::error::{Error, Result};
 use crate::input::{InputError, InputRoot};

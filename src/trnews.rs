@@ -548,8 +548,8 @@ fn samples_within(h: &Signal, dt_s: f64, duration_s: f64) -> Result<usize> {
     Ok(n)
 }
 
-/// Every receiver's recording from t = 0 on `recordings`' step, of the same length; the
-/// drives' step is checked by the caller.
+/// Checks that every recording has as many traces as the first and that every trace is on
+/// step `dt_s` (the drives' step is checked by the caller).
 fn same_receivers_and_step(recordings: &[Recording], dt_s: f64) -> Result<()> {
     let Some(first) = recordings.first() else {
         return Ok(());
