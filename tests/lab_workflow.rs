@@ -299,11 +299,11 @@ fn pulse_inversion_runs_on_recorded_lab_data_and_on_a_measured_impulse_response(
         .map(|h| scene_header.iter().position(|s| s == h).expect(h))
         .collect();
     assert_eq!(header.len(), 7, "{header:?}");
+    assert_eq!(rows.len(), scene_rows.len());
     for (r, s) in rows.iter().zip(&scene_rows) {
         let picked: Vec<&String> = columns.iter().map(|&c| &s[c]).collect();
         assert_eq!(r.iter().collect::<Vec<_>>(), picked);
     }
-    assert_eq!(rows.len(), scene_rows.len());
 
     let measured = on_impulse("pulse_inversion", &sim, &tmp);
     let (header, rows) = csv(&table(&measured));
