@@ -152,6 +152,16 @@ impl InputRoot {
         Ok(bytes)
     }
 
+    /// True when `rel` (relative, without `..`) is a directory beneath the root; false when it
+    /// is missing, not a directory, or leads out of the root.
+    pub fn is_dir(&self, rel: &str) -> bool {
+        let p = Path::new(rel);
+        !p.has_root()
+            && p.components()
+                .all(|c| matches!(c, Component::Normal(_) | Component::CurDir))
+            && self.dir.is_dir(p)
+    }
+
     /// True when the longest existing prefix of `rel` resolves outside the root (wording only:
     /// cap-std has already refused the open).
     fn leads_outside(&self, rel: &Path) -> bool {

@@ -15,6 +15,7 @@ pub mod figures;
 pub mod format;
 pub mod input;
 pub mod io;
+pub mod lab;
 pub mod laminate;
 pub mod material;
 pub mod mesh;

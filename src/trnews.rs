@@ -99,6 +99,9 @@ pub struct RecordedChannel {
     pub peak_drive: f64,
     /// The band the traces were recorded in.
     pub band: String,
+    /// For a lab directory's channel (see [`crate::lab`]): where a drive without a recording
+    /// is listed for the lab to play; `None`: such a drive is refused with an error.
+    pub to_record: Option<Arc<crate::lab::ToRecord>>,
 }
 
 impl RecordedChannel {
@@ -243,30 +246,48 @@ impl Responder {
         positive_peak(peak_drive)?;
         let drives: Vec<Signal> = recordings.iter().map(|r| r.sent.clone()).collect();
         let dt_s = common_step(&drives, "recordings.sent")?;
-        let receivers = recordings[0].received.len();
-        for (i, r) in recordings.iter().enumerate() {
-            let what = format!("recordings[{i}].received");
-            if r.received.len() != receivers {
-                return Err(Error::invalid(
-                    &what,
-                    format!("{} traces", r.received.len()),
-                    format!("recordings[0] has {receivers}"),
-                ));
-            }
-            let step = common_step(&r.received, &what)?;
-            if (step / dt_s - 1.0).abs() > 1e-9 {
-                return Err(Error::invalid(
-                    format!("{what}[0].dt"),
-                    step,
-                    format!("differs from the drives' step {dt_s}"),
-                ));
-            }
-        }
+        same_receivers_and_step(&recordings, dt_s)?;
         Ok(Responder {
             channel: Channel::Recorded(Arc::new(RecordedChannel {
                 recordings,
                 peak_drive,
                 band,
+                to_record: None,
+            })),
+            dt_s,
+            companions: Vec::new(),
+        })
+    }
+
+    /// A lab directory's channel (see [`crate::lab`]): recordings on step `dt_s`, none
+    /// before the first phase; a batch of transmissions with drives not recorded adds them
+    /// all to `to_record` and stops with its error ([`crate::lab::ToRecord::stop`]).
+    pub fn from_lab(
+        recordings: Vec<Recording>,
+        dt_s: f64,
+        peak_drive: f64,
+        band: String,
+        to_record: Arc<crate::lab::ToRecord>,
+    ) -> Result<Responder> {
+        positive_peak(peak_drive)?;
+        let drives: Vec<Signal> = recordings.iter().map(|r| r.sent.clone()).collect();
+        if let Some(i) = drives
+            .iter()
+            .position(|d| (d.dt_s / dt_s - 1.0).abs() > 1e-9)
+        {
+            return Err(Error::invalid(
+                format!("recordings[{i}].sent.dt"),
+                drives[i].dt_s,
+                format!("differs from the channel's step dt_s = {dt_s}"),
+            ));
+        }
+        same_receivers_and_step(&recordings, dt_s)?;
+        Ok(Responder {
+            channel: Channel::Recorded(Arc::new(RecordedChannel {
+                recordings,
+                peak_drive,
+                band,
+                to_record: Some(to_record),
             })),
             dt_s,
             companions: Vec::new(),
@@ -409,14 +430,19 @@ impl Responder {
         }
     }
 
+    /// The drive `s` on this responder's step (resampled when its step differs).
+    fn on_step(&self, s: &Signal) -> Result<Signal> {
+        if (s.dt_s / self.dt_s - 1.0).abs() > 1e-9 {
+            Ok(signal::resample(s, self.dt_s)?)
+        } else {
+            Ok(s.clone())
+        }
+    }
+
     /// Receivers' responses to the drive signal `s` (Pa for a scene) over `duration_s`,
     /// through the scene's transducers.
     pub fn respond(&self, s: &Signal, duration_s: f64) -> Result<Response> {
-        let s = if (s.dt_s / self.dt_s - 1.0).abs() > 1e-9 {
-            signal::resample(s, self.dt_s)?
-        } else {
-            s.clone()
-        };
+        let s = self.on_step(s)?;
         match &self.channel {
             Channel::Scene {
                 scene,
@@ -448,13 +474,24 @@ impl Responder {
                     report: None,
                 })
             }
-            Channel::Recorded(c) => recorded(c, &s, self.dt_s, duration_s),
+            Channel::Recorded(c) => {
+                let mut answers = c.answer_all(&[s], self.dt_s, duration_s)?;
+                Ok(answers.remove(0))
+            }
         }
     }
 
     /// Responses to several transmissions; independent simulations run in parallel, and the
-    /// results are identical for any thread count.
+    /// results are identical for any thread count. Recorded responses are looked up all
+    /// together, so that a lab channel lists every drive of the batch it has not recorded.
     pub fn respond_all(&self, sources: &[Signal], duration_s: f64) -> Result<Vec<Response>> {
+        if let Channel::Recorded(c) = &self.channel {
+            let drives = sources
+                .iter()
+                .map(|s| self.on_step(s))
+                .collect::<Result<Vec<_>>>()?;
+            return c.answer_all(&drives, self.dt_s, duration_s);
+        }
         sources
             .par_iter()
             .map(|s| self.respond(s, duration_s))
@@ -511,25 +548,89 @@ fn samples_within(h: &Signal, dt_s: f64, duration_s: f64) -> Result<usize> {
     Ok(n)
 }
 
-/// The recording of drive `s` over `duration_s`, or an error saying that this drive was not
-/// recorded (with its peak and length, to find it among the files).
-fn recorded(c: &RecordedChannel, s: &Signal, dt_s: f64, duration_s: f64) -> Result<Response> {
-    let same = |r: &&Recording| {
-        r.sent.len() == s.len()
-            && signal::relative_l2(&r.sent, s, None).is_ok_and(|d| d <= RecordedChannel::MATCH)
+/// Checks that every recording has as many traces as the first and that every trace is on
+/// step `dt_s` (the drives' step is checked by the caller).
+fn same_receivers_and_step(recordings: &[Recording], dt_s: f64) -> Result<()> {
+    let Some(first) = recordings.first() else {
+        return Ok(());
     };
-    let Some(r) = c.recordings.iter().find(same) else {
-        return Err(Error::invalid(
+    let receivers = first.received.len();
+    for (i, r) in recordings.iter().enumerate() {
+        let what = format!("recordings[{i}].received");
+        if r.received.len() != receivers {
+            return Err(Error::invalid(
+                &what,
+                format!("{} traces", r.received.len()),
+                format!("recordings[0] has {receivers}"),
+            ));
+        }
+        let step = common_step(&r.received, &what)?;
+        if (step / dt_s - 1.0).abs() > 1e-9 {
+            return Err(Error::invalid(
+                format!("{what}[0].dt"),
+                step,
+                format!("differs from the drives' step {dt_s}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+impl RecordedChannel {
+    /// The recording whose drive is `s`: same length, relative L2 difference at most
+    /// [`RecordedChannel::MATCH`].
+    fn find(&self, s: &Signal) -> Option<&Recording> {
+        self.recordings.iter().find(|r| {
+            r.sent.len() == s.len()
+                && signal::relative_l2(&r.sent, s, None).is_ok_and(|d| d <= Self::MATCH)
+        })
+    }
+
+    /// The recordings of `drives` (on step `dt_s`) over `duration_s`. A drive without one is
+    /// refused, naming it; on a lab channel every such drive of the batch is listed to record
+    /// and the batch stops with the list's error.
+    fn answer_all(&self, drives: &[Signal], dt_s: f64, duration_s: f64) -> Result<Vec<Response>> {
+        let found: Vec<Option<&Recording>> = drives.iter().map(|s| self.find(s)).collect();
+        let missing: Vec<&Signal> = drives
+            .iter()
+            .zip(&found)
+            .filter(|(_, r)| r.is_none())
+            .map(|(s, _)| s)
+            .collect();
+        if let Some(first) = missing.first() {
+            let Some(list) = &self.to_record else {
+                return Err(self.not_recorded(first));
+            };
+            for s in &missing {
+                list.want(s, duration_s);
+            }
+            return Err(list.stop());
+        }
+        found
+            .into_iter()
+            .flatten()
+            .map(|r| recorded(r, dt_s, duration_s))
+            .collect()
+    }
+
+    /// The error for drive `s`, not recorded (with its peak and length, to find it among the
+    /// files).
+    fn not_recorded(&self, s: &Signal) -> Error {
+        Error::invalid(
             "transmission",
             format!("{} samples, peak {:.6e}", s.len(), s.max_abs()),
             format!(
                 "was not recorded: none of the {} recordings sent this drive (relative L2 \
                  difference <= {:e}); send it, record the receivers and add the recording",
-                c.recordings.len(),
-                RecordedChannel::MATCH
+                self.recordings.len(),
+                Self::MATCH
             ),
-        ));
-    };
+        )
+    }
+}
+
+/// The recording `r` over `duration_s`, or an error when it is shorter.
+fn recorded(r: &Recording, dt_s: f64, duration_s: f64) -> Result<Response> {
     let n = (duration_s / dt_s).round() as usize;
     if let Some(short) = r.received.iter().find(|t| t.len() < n) {
         return Err(Error::invalid(

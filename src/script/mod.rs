@@ -11,6 +11,7 @@
 //! `study`, `figure`, `fmt`, `test`, `host`.
 
 mod accuracy;
+mod channel;
 mod convert;
 mod figure;
 mod format;

@@ -199,7 +199,8 @@ pub fn module() -> Module {
 /// Delayed TR-NEWS over `points` as a sweep of work units (see [`crate::sweep`]): each point
 /// is stored when done, read back by a rerun, shared out by a shard and only read by a
 /// merge. Points are computed in parallel; each one runs over the sweep's longest delay, so
-/// it is the same computed alone or with the others.
+/// it is the same computed alone or with the others. On a lab channel (recordings, see
+/// [`crate::lab`]) the points are looked up together instead, without point files.
 fn delayed_sweep(
     ctx: &NativeCallContext,
     r: &Responder,
@@ -211,6 +212,11 @@ fn delayed_sweep(
     use crate::script::WithPosition;
     use crate::sweep::{Key, PointSpec, Sweep};
     use rayon::prelude::*;
+    if crate::lab::to_record_of(r).is_some() {
+        // A lab's recordings are looked up, not simulated: every point at once, so that one
+        // run lists every delayed drive still to record.
+        return crate::trnews::delayed_tr_news(r, tr, focus, points, half_window_s).at(ctx);
+    }
     let max_delay_s = points
         .iter()
         .flat_map(|p| p.0.iter())
@@ -400,6 +406,12 @@ mod trnews_api {
     #[rhai_fn(return_raw)]
     pub fn responder(ctx: NativeCallContext, scene: SceneRef, duration_s: FLOAT) -> Res<Responder> {
         Responder::new(scene, duration_s).at(&ctx)
+    }
+
+    /// The channel an experiment script runs on, from its `--set` parameters (the same for every script; README "Lab data"): `channel = scene` (default) gives () and the script simulates its scenes; `channel = impulse` (with impulse = FILE.npy under --data, one row per receiver, dt_s, peak_drive) gives a measured linear channel and `channel = recorded` (with recordings = DIR, a lab directory under --data, dt_s, peak_drive) a lab's recordings, each as #{kind, sample, responder}; `band` and `sample` label the data. On the recorded channel, drives not recorded yet are written to OUT/to_record/ and the run stops saying how to add them. A parameter that does not apply to the chosen channel is an error.
+    #[rhai_fn(return_raw)]
+    pub fn channel(ctx: NativeCallContext) -> Res<Dynamic> {
+        crate::script::channel::from_params(&ctx)
     }
 
     /// A measured channel from one impulse response per receiver (Signals on one step: each receiver's response to a unit drive sample at t = 0, transducers included), with options #{peak_drive, band}: every transmission is the discrete convolution y_r[n] = sum_k s[k] h_r[n - k], and tr_news, delayed and pulse_inversion run on it as on a scene.
