@@ -243,20 +243,15 @@ impl Responder {
         peak_drive: f64,
         band: String,
     ) -> Result<Responder> {
-        positive_peak(peak_drive)?;
         let drives: Vec<Signal> = recordings.iter().map(|r| r.sent.clone()).collect();
         let dt_s = common_step(&drives, "recordings.sent")?;
-        same_receivers_and_step(&recordings, dt_s)?;
-        Ok(Responder {
-            channel: Channel::Recorded(Arc::new(RecordedChannel {
-                recordings,
-                peak_drive,
-                band,
-                to_record: None,
-            })),
-            dt_s,
-            companions: Vec::new(),
-        })
+        let channel = RecordedChannel {
+            recordings,
+            peak_drive,
+            band,
+            to_record: None,
+        };
+        Responder::recorded(channel, dt_s)
     }
 
     /// A lab directory's channel (see [`crate::lab`]): recordings on step `dt_s`, none
@@ -269,26 +264,33 @@ impl Responder {
         band: String,
         to_record: Arc<crate::lab::ToRecord>,
     ) -> Result<Responder> {
-        positive_peak(peak_drive)?;
-        let drives: Vec<Signal> = recordings.iter().map(|r| r.sent.clone()).collect();
-        if let Some(i) = drives
+        if let Some((i, r)) = recordings
             .iter()
-            .position(|d| (d.dt_s / dt_s - 1.0).abs() > 1e-9)
+            .enumerate()
+            .find(|(_, r)| (r.sent.dt_s / dt_s - 1.0).abs() > 1e-9)
         {
             return Err(Error::invalid(
                 format!("recordings[{i}].sent.dt"),
-                drives[i].dt_s,
+                r.sent.dt_s,
                 format!("differs from the channel's step dt_s = {dt_s}"),
             ));
         }
-        same_receivers_and_step(&recordings, dt_s)?;
+        let channel = RecordedChannel {
+            recordings,
+            peak_drive,
+            band,
+            to_record: Some(to_record),
+        };
+        Responder::recorded(channel, dt_s)
+    }
+
+    /// A responder on recorded responses at step `dt_s`, once its recordings' traces are
+    /// checked (same receivers, same step) and its drive peak is positive.
+    fn recorded(channel: RecordedChannel, dt_s: f64) -> Result<Responder> {
+        positive_peak(channel.peak_drive)?;
+        same_receivers_and_step(&channel.recordings, dt_s)?;
         Ok(Responder {
-            channel: Channel::Recorded(Arc::new(RecordedChannel {
-                recordings,
-                peak_drive,
-                band,
-                to_record: Some(to_record),
-            })),
+            channel: Channel::Recorded(Arc::new(channel)),
             dt_s,
             companions: Vec::new(),
         })
