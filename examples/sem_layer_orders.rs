@@ -14,50 +14,31 @@
 use trnews::laminate::{Laminate, StochasticSpec};
 use trnews::material::Plane;
 use trnews::scene::{Scene, SceneSpec};
-use trnews::sem::{gll::Gll, SemModel};
+use trnews::sem::{SemModel, SemSpec};
 
 const WIDTH: f64 = 16e-3;
 
-/// Smallest gap between GLL points of order p on an element of size h.
-fn smallest_gap(h: f64, p: usize) -> f64 {
-    let g = Gll::new(p);
-    0.5 * h * (g.points[1] - g.points[0])
-}
-
+/// The laminate as spectral elements (`SemModel::layered`): per layer the order its rule
+/// picks, or `px` across every row ("uniform") on the same element lines.
 fn build(lam: &Laminate, hx: f64, px: usize, row_m: f64, per_layer: bool) -> SemModel {
-    let mut rows = vec![0.0];
-    let mut material = Vec::new();
-    for layer in &lam.layers {
-        let n = (layer.thickness_m / row_m).ceil().max(1.0) as usize;
-        let y0 = *rows.last().expect("rows");
-        for k in 1..=n {
-            rows.push(y0 + layer.thickness_m * k as f64 / n as f64);
-            material.push(layer.material);
-        }
+    let cut = SemSpec {
+        order_x: px,
+        max_order_y: px,
+        element_size_x_m: hx,
+        element_size_y_m: row_m,
+    };
+    let m = SemModel::layered(lam, WIDTH, &cut).expect("sem");
+    if per_layer {
+        return m;
     }
-    let x_gap = smallest_gap(hx, px);
-    let orders: Vec<usize> = rows
-        .windows(2)
-        .map(|w| {
-            if !per_layer {
-                return px;
-            }
-            (1..=px)
-                .rev()
-                .find(|&p| smallest_gap(w[1] - w[0], p) >= x_gap)
-                .unwrap_or(1)
-        })
-        .collect();
-    let columns = (WIDTH / hx).round() as usize;
+    let rows = m.rows_m.len() - 1;
     SemModel::new(
-        (0..=columns)
-            .map(|i| i as f64 * WIDTH / columns as f64)
-            .collect(),
-        rows,
+        m.columns_m,
+        m.rows_m,
         px,
-        &orders,
-        lam.materials.clone(),
-        material,
+        &vec![px; rows],
+        m.materials,
+        m.row_material,
     )
     .expect("sem")
 }

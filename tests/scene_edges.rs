@@ -290,6 +290,124 @@ fn plane_wave_through_a_layer_stack_matches_the_transfer_matrix_solution_at_seco
     }
 }
 
+/// The same plane wave on spectral elements through the library's loop
+/// (`solve::run_central_difference_on`): 2 elements across the strip, element rows of at most
+/// 0.15 mm aligned with the layers, order p along x and (at most) across y; roller sides
+/// (u_x = 0 on the side node columns), GLL-weighted Lysmer-Kuhlemeyer dashpots at the bottom,
+/// the uniform normal traction with GLL weights (`SemModel::side_load`), receivers
+/// interpolated at the same points. Relative L2 errors against the exact solution at a step
+/// of `dt`.
+fn sem_errors(order: usize, dt: f64) -> Vec<f64> {
+    use trnews::sem::{SemModel, SemSpec};
+    use trnews::solve::{run_central_difference_on, Quantity, Receiver, Source};
+    let scene = Scene::build(&spec(H0, EdgeCondition::Roller)).unwrap();
+    let cut = SemSpec {
+        order_x: order,
+        max_order_y: order,
+        element_size_x_m: WIDTH / 2.0,
+        element_size_y_m: 0.15e-3,
+    };
+    let mut sem = SemModel::layered(&scene.laminate, WIDTH, &cut).unwrap();
+    let last = sem.x_nodes_m.len() - 1;
+    sem.fixed_dofs = (0..sem.y_nodes_m.len())
+        .flat_map(|j| [2 * sem.node(0, j), 2 * sem.node(last, j)])
+        .collect();
+    sem.dashpots = sem.lysmer_dashpots(&[Side::Bottom]);
+    let mut free = vec![true; sem.dofs()];
+    for &d in &sem.fixed_dofs {
+        free[d] = false;
+    }
+    let dt_crit = 2.0 / sem.max_eigenvalue(&free).0.sqrt();
+    // the traction's direction as the T3 scene applies it (top edge, u_y)
+    let sign = scene
+        .transmitter
+        .iter()
+        .find(|w| w.0 % 2 == 1)
+        .unwrap()
+        .1
+        .signum();
+    let steps = (DURATION / dt).round() as usize + 1;
+    let source = Source {
+        weights: sem
+            .side_load(Side::Top, 0.0, WIDTH)
+            .into_iter()
+            .map(|(n, w)| (2 * n + 1, sign * w))
+            .collect(),
+        signal: Signal {
+            dt_s: dt,
+            t0_s: 0.0,
+            samples: (0..steps).map(|k| ricker(k as f64 * dt, PULSE)).collect(),
+        },
+    };
+    let receivers: Vec<Receiver> = POINTS
+        .iter()
+        .map(|&(x, y)| Receiver {
+            name: format!("({x}, {y})"),
+            weights: sem
+                .point_weights(x, y)
+                .unwrap()
+                .into_iter()
+                .map(|(n, w)| (2 * n + 1, w))
+                .collect(),
+            quantity: Quantity::Displacement,
+        })
+        .collect();
+    let config = RunConfig {
+        dt_s: Some(dt),
+        duration_s: DURATION,
+        progress: false,
+        ..Default::default()
+    };
+    let out = run_central_difference_on(&sem, dt_crit, &[source], &receivers, &config).unwrap();
+    assert!(out.report.energy_residual_peak < 1e-6, "{:?}", out.report);
+    let ys: Vec<f64> = POINTS.iter().map(|p| p.1).collect();
+    let reference = exact(dt, out.traces[0].samples.len(), &ys);
+    out.traces
+        .iter()
+        .zip(&reference)
+        .map(|(t, r)| relative_error(&t.samples, r))
+        .collect()
+}
+
+/// Spectral elements reach the exact plane-wave solution at the time step's accuracy: at
+/// dt = 0.5 ns the errors measured 2e-5 to 7.8e-4 at order 2 (the T3 bound at h = 50 um is
+/// 4e-3), 1.6e-6 to 1.6e-5 at order 3, and 1.6e-6 to 2.4e-6 from order 4 on, where they stop
+/// falling with the order: that floor is the central-difference phase error, second order
+/// in dt (at order 4, dt = 1 ns gives 4e-6 to 7e-6, about 3x; the rest is ~1e-6 of the exact
+/// solution's own sampling). Asserted: order 2 below 2e-3, order 3 at least 3x below order 2
+/// at every receiver (p-convergence), orders 4 and 5 below 5e-6, and doubling dt at order 4
+/// raising every error at least 2.2x (measured 2.5-3.6x: the floor is the time step's), with the energy ledger
+/// closing to 1e-6 in every run.
+#[test]
+fn plane_wave_through_a_layer_stack_on_spectral_elements() {
+    let dt = 0.5e-9;
+    let mut by_order = Vec::new();
+    for order in 2..=5 {
+        let e = sem_errors(order, dt);
+        let listed: Vec<String> = e.iter().map(|v| format!("{v:.2e}")).collect();
+        eprintln!("SEM order {order}, dt {dt:e}: {}", listed.join(" "));
+        by_order.push(e);
+    }
+    let coarse_step = sem_errors(4, 2.0 * dt);
+    let listed: Vec<String> = coarse_step.iter().map(|v| format!("{v:.2e}")).collect();
+    eprintln!("SEM order 4, dt {:e}: {}", 2.0 * dt, listed.join(" "));
+    for (p, point) in POINTS.iter().enumerate() {
+        let e: Vec<f64> = by_order.iter().map(|e| e[p]).collect();
+        assert!(e[0] < 2e-3, "order 2 at {point:?}: {e:?}");
+        assert!(e[1] < e[0] / 3.0, "order 3 vs 2 at {point:?}: {e:?}");
+        assert!(
+            e[2] < 5e-6 && e[3] < 5e-6,
+            "orders 4, 5 at {point:?}: {e:?}"
+        );
+        assert!(
+            coarse_step[p] > 2.2 * e[2],
+            "dt doubled at order 4, {point:?}: {} vs {}",
+            coarse_step[p],
+            e[2]
+        );
+    }
+}
+
 #[test]
 fn receivers_on_nodes_take_the_node_alone_and_off_nodes_the_holding_element() {
     let scene = Scene::build(&spec(H0, EdgeCondition::Roller)).unwrap();

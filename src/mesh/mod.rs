@@ -118,7 +118,7 @@ const COUNT_TOLERANCE: f64 = 1e-9;
 
 /// Splits [a, b] with breakpoints into pieces no longer than `h` (at least one per piece,
 /// up to the relative round-off [`COUNT_TOLERANCE`]).
-fn subdivide(breaks: &[f64], h: f64) -> Vec<f64> {
+pub(crate) fn subdivide(breaks: &[f64], h: f64) -> Vec<f64> {
     let mut out = vec![breaks[0]];
     for w in breaks.windows(2) {
         let ratio = (w[1] - w[0]) / h;

@@ -13,6 +13,9 @@
 //! `j * nx + i`, DOFs `2 * node + component` (as the T3 mesh numbers them).
 
 pub mod gll;
+mod layered;
+
+pub use layered::SemSpec;
 
 use crate::error::{Error, Result};
 use crate::material::Material;

@@ -337,3 +337,29 @@ fn point_weights_interpolate_polynomials_exactly() {
     assert!(m.point_weights(2.1e-3, 0.5e-3).is_none());
     assert!(m.point_weights(1e-3, -1e-9).is_none());
 }
+
+/// The consistent load of a uniform traction on part of a side integrates the element
+/// polynomials over that part exactly: on the top side (order 6 along x) the weights sum to
+/// the part's length and reproduce int x^4 dx over it, for a part that starts and ends inside
+/// elements; the left side (orders 5, 1, 4 across the rows) gives the part's length too.
+#[test]
+fn side_load_integrates_over_any_part_of_a_side() {
+    let m = layered();
+    let (a, b) = (0.31e-3, 1.234e-3);
+    let top = m.side_load(Side::Top, a, b);
+    let x_of = |n: usize| m.x_nodes_m[n % m.nx()];
+    let length: f64 = top.iter().map(|p| p.1).sum();
+    let quartic: f64 = top.iter().map(|&(n, w)| w * (x_of(n) * 1e3).powi(4)).sum();
+    let exact = ((b * 1e3).powi(5) - (a * 1e3).powi(5)) / 5.0 * 1e-3;
+    assert!((length - (b - a)).abs() < 1e-15, "{length:e}");
+    assert!(
+        (quartic - exact).abs() < 1e-13 * exact,
+        "{quartic:e} vs {exact:e}"
+    );
+    let left: f64 = m
+        .side_load(Side::Left, 0.2e-3, 0.51e-3)
+        .iter()
+        .map(|p| p.1)
+        .sum();
+    assert!((left - 0.31e-3).abs() < 1e-15, "{left:e}");
+}

@@ -16,7 +16,7 @@ use crate::contact::{
 };
 use crate::error::{require_positive, Error, Result};
 use crate::fem::Model;
-use crate::mesh::Mesh;
+use crate::mesh::{Crack, Mesh};
 use crate::signal::Signal;
 pub use discretisation::{Discretisation, Fem};
 pub use explicit::{CentralDifference, Coefficients};
@@ -215,39 +215,7 @@ pub fn run(
     receivers: &[Receiver],
     config: &RunConfig,
 ) -> Result<RunOutput> {
-    require_positive("duration_s", config.duration_s)?;
-    if let Some(dt) = config.dt_s {
-        require_positive("dt_s", dt)?;
-    }
-    if !(config.step_safety > 0.0 && config.step_safety <= 1.0) {
-        return Err(Error::invalid(
-            "step_safety",
-            config.step_safety,
-            "must be in (0, 1]",
-        ));
-    }
-    if config.ledger_every == 0 {
-        return Err(Error::invalid("ledger_every", 0, "must be at least 1"));
-    }
-    if config.snapshot_every == Some(0) {
-        return Err(Error::invalid("snapshot_every", 0, "must be at least 1"));
-    }
-    validate_weights(model, sources.iter().map(|s| ("source", &s.weights)))?;
-    validate_weights(model, receivers.iter().map(|r| ("receiver", &r.weights)))?;
-    for (field, initial) in [
-        ("initial_displacement", &config.initial_displacement),
-        ("initial_velocity", &config.initial_velocity),
-    ] {
-        if let Some(x) = initial {
-            if x.len() != model.dofs() || x.iter().any(|v| !v.is_finite()) {
-                return Err(Error::invalid(
-                    field,
-                    format!("{} values", x.len()),
-                    format!("needs {} finite values", model.dofs()),
-                ));
-            }
-        }
-    }
+    validate(model.dofs(), sources, receivers, config)?;
     match config.integrator {
         Integrator::Explicit => run_explicit(model, sources, receivers, config),
         Integrator::Newmark { consistent_mass } => {
@@ -270,8 +238,52 @@ pub fn run(
     }
 }
 
+/// Checks the run options, the sources' and receivers' DOFs and weights, and the initial
+/// fields against a body of `dofs` DOFs, naming the first field that is wrong.
+fn validate(
+    dofs: usize,
+    sources: &[Source],
+    receivers: &[Receiver],
+    config: &RunConfig,
+) -> Result<()> {
+    require_positive("duration_s", config.duration_s)?;
+    if let Some(dt) = config.dt_s {
+        require_positive("dt_s", dt)?;
+    }
+    if !(config.step_safety > 0.0 && config.step_safety <= 1.0) {
+        return Err(Error::invalid(
+            "step_safety",
+            config.step_safety,
+            "must be in (0, 1]",
+        ));
+    }
+    if config.ledger_every == 0 {
+        return Err(Error::invalid("ledger_every", 0, "must be at least 1"));
+    }
+    if config.snapshot_every == Some(0) {
+        return Err(Error::invalid("snapshot_every", 0, "must be at least 1"));
+    }
+    validate_weights(dofs, sources.iter().map(|s| ("source", &s.weights)))?;
+    validate_weights(dofs, receivers.iter().map(|r| ("receiver", &r.weights)))?;
+    for (field, initial) in [
+        ("initial_displacement", &config.initial_displacement),
+        ("initial_velocity", &config.initial_velocity),
+    ] {
+        if let Some(x) = initial {
+            if x.len() != dofs || x.iter().any(|v| !v.is_finite()) {
+                return Err(Error::invalid(
+                    field,
+                    format!("{} values", x.len()),
+                    format!("needs {dofs} finite values"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn validate_weights<'a>(
-    model: &Model,
+    dofs: usize,
     sets: impl Iterator<Item = (&'a str, &'a Vec<(usize, f64)>)>,
 ) -> Result<()> {
     for (i, (what, w)) in sets.enumerate() {
@@ -282,11 +294,11 @@ fn validate_weights<'a>(
                 "selects no node of the mesh",
             ));
         }
-        if let Some(&(d, v)) = w.iter().find(|(d, v)| *d >= model.dofs() || !v.is_finite()) {
+        if let Some(&(d, v)) = w.iter().find(|(d, v)| *d >= dofs || !v.is_finite()) {
             return Err(Error::invalid(
                 format!("{what}[{i}]"),
                 format!("DOF {d} weight {v}"),
-                format!("DOF must be < {} and weight finite", model.dofs()),
+                format!("DOF must be < {dofs} and weight finite"),
             ));
         }
     }
@@ -297,7 +309,7 @@ fn validate_weights<'a>(
 /// with the estimate) when the traces, sources, crack records and snapshots it would keep
 /// exceed the memory limit ([`crate::budget::check_memory`]); estimated before allocating.
 fn run_steps(
-    model: &Model,
+    body: BodyShape<'_>,
     sources: usize,
     receivers: usize,
     config: &RunConfig,
@@ -311,7 +323,7 @@ fn run_steps(
         ));
     }
     let steps = (config.duration_s / dt).round().max(1.0);
-    let crack_pairs = model.crack.as_ref().map_or(0, |c| c.pairs.len()) as f64;
+    let crack_pairs = body.crack.map_or(0, |c| c.pairs.len()) as f64;
     let per_step = 8.0
         * (sources as f64
             + receivers as f64
@@ -323,7 +335,7 @@ fn run_steps(
             + if config.contact.is_some() { 3.0 } else { 0.0 });
     let ledger = 8.0 * 9.0 * steps / config.ledger_every.max(1) as f64;
     let snapshots = match (config.snapshot_every, &config.snapshot_dir) {
-        (Some(k), None) => 8.0 * model.dofs() as f64 * (steps / k.max(1) as f64).ceil(),
+        (Some(k), None) => 8.0 * body.dofs as f64 * (steps / k.max(1) as f64).ceil(),
         _ => 0.0,
     };
     let bytes = per_step * steps + ledger + snapshots;
@@ -398,6 +410,15 @@ impl<'a> SampledSources<'a> {
     }
 }
 
+/// What a standard run needs to know of the body besides its discretisation.
+#[derive(Clone, Copy)]
+struct BodyShape<'a> {
+    dofs: usize,
+    crack: Option<&'a Crack>,
+    /// x of a node (m), for the crack traces.
+    node_x: &'a dyn Fn(usize) -> f64,
+}
+
 /// The observers of a standard run, as [`RunConfig`] asks for them.
 struct StandardObservers<'a> {
     receivers: ReceiverTraces<'a>,
@@ -408,7 +429,7 @@ struct StandardObservers<'a> {
 
 impl<'a> StandardObservers<'a> {
     fn new(
-        model: &'a Model,
+        body: BodyShape<'a>,
         receivers: &'a [Receiver],
         config: &RunConfig,
         steps: usize,
@@ -418,9 +439,8 @@ impl<'a> StandardObservers<'a> {
         StandardObservers {
             receivers: ReceiverTraces::new(receivers, steps),
             ledger: LedgerMonitor::new(stepper, config.ledger_every, dt_crit_s),
-            crack: model
+            crack: body
                 .crack
-                .as_ref()
                 .filter(|_| config.record_crack)
                 .map(|c| CrackRecorder::new(c, steps)),
             snapshots: config
@@ -451,7 +471,7 @@ impl<'a> StandardObservers<'a> {
     /// The run's output around its report.
     fn output(
         self,
-        model: &Model,
+        body: BodyShape<'_>,
         receivers: &[Receiver],
         report: RunReport,
         contact_series: Option<ContactSeries>,
@@ -460,9 +480,7 @@ impl<'a> StandardObservers<'a> {
         RunOutput {
             traces: self.receivers.into_signals(dt),
             receiver_names: receivers.iter().map(|r| r.name.clone()).collect(),
-            crack: self
-                .crack
-                .map(|c| c.into_traces(dt, |node| model.mesh.nodes[node][0])),
+            crack: self.crack.map(|c| c.into_traces(dt, body.node_x)),
             contact_series,
             snapshots: self.snapshots.map(|s| s.snapshots).unwrap_or_default(),
             ledger: self.ledger.ledger,
@@ -496,8 +514,7 @@ fn report(
     }
 }
 
-/// Central differences on a T3 model: the contact law chosen once here, so the loop of a
-/// scene without a contacting crack is compiled without contact.
+/// Central differences on a T3 model ([`run_central_difference_on`] with the model's crack).
 fn run_explicit(
     model: &Model,
     sources: &[Source],
@@ -509,40 +526,93 @@ fn run_explicit(
     let stab = config
         .stability
         .unwrap_or_else(|| stability::estimate(model));
-    let dt = config.dt_s.unwrap_or(config.step_safety * stab.dt_crit_s);
-    let ratio = dt / stab.dt_crit_s;
+    let node_x = |node: usize| model.mesh.nodes[node][0];
+    let body = BodyShape {
+        dofs: model.dofs(),
+        crack: model.crack.as_ref(),
+        node_x: &node_x,
+    };
+    central_difference(
+        &fem,
+        body,
+        stab.dt_crit_s,
+        (sources, receivers),
+        config,
+        setup,
+    )
+}
+
+/// Central differences with lumped mass on any discretisation (spectral elements, or a
+/// custom one) without a crack, with the standard observers: the same loop, checks and
+/// report as [`run`] on a T3 model. `dt_crit_s` is the body's critical step (e.g.
+/// [`crate::sem::SemModel::max_eigenvalue`]); `config.stability` is not used.
+pub fn run_central_difference_on<D: Discretisation>(
+    body: &D,
+    dt_crit_s: f64,
+    sources: &[Source],
+    receivers: &[Receiver],
+    config: &RunConfig,
+) -> Result<RunOutput> {
+    validate(body.dofs(), sources, receivers, config)?;
+    let shape = BodyShape {
+        dofs: body.dofs(),
+        crack: None,
+        node_x: &|_| 0.0,
+    };
+    central_difference(
+        body,
+        shape,
+        dt_crit_s,
+        (sources, receivers),
+        config,
+        Instant::now(),
+    )
+}
+
+/// The explicit run: step, steps, the contact law chosen once here (so the loop of a body
+/// without a contacting crack is compiled without contact), the stepper and its observers.
+fn central_difference<D: Discretisation>(
+    disc: &D,
+    body: BodyShape<'_>,
+    dt_crit_s: f64,
+    (sources, receivers): (&[Source], &[Receiver]),
+    config: &RunConfig,
+    setup: Instant,
+) -> Result<RunOutput> {
+    let dt = config.dt_s.unwrap_or(config.step_safety * dt_crit_s);
+    let ratio = dt / dt_crit_s;
     if ratio > 1.0 && !config.force {
         return Err(Error::StepTooLarge {
             dt_s: dt,
-            dt_crit_s: stab.dt_crit_s,
+            dt_crit_s,
             ratio,
         });
     }
-    let steps = run_steps(model, sources.len(), receivers.len(), config, dt)?;
-    let coef = Coefficients::new(&fem, dt);
+    let steps = run_steps(body, sources.len(), receivers.len(), config, dt)?;
+    let coef = Coefficients::new(disc, dt);
     let forced = SampledSources::new(sources, dt, steps)?;
     let (u0, v0) = (
         config.initial_displacement.as_deref(),
         config.initial_velocity.as_deref(),
     );
-    let run = (model, receivers, config, steps, stab.dt_crit_s, setup);
-    match (&model.crack, &config.contact) {
+    let run = (body, receivers, config, steps, dt_crit_s, setup);
+    match (body.crack, &config.contact) {
         (Some(crack), Some(options)) => {
             let solver = ContactSolver::new(crack, &coef.compliance, *options, steps)?;
-            let stepper = CentralDifference::new(&fem, coef, dt, forced, solver, u0, v0);
+            let stepper = CentralDifference::new(disc, coef, dt, forced, solver, u0, v0);
             finish_explicit(stepper, run)
         }
         _ => {
-            let stepper = CentralDifference::new(&fem, coef, dt, forced, NoContact, u0, v0);
+            let stepper = CentralDifference::new(disc, coef, dt, forced, NoContact, u0, v0);
             finish_explicit(stepper, run)
         }
     }
 }
 
-/// What a standard run needs besides its stepper: model, receivers, options, steps, dt_crit
-/// and the clock started at setup.
+/// What a standard run needs besides its stepper: the body, receivers, options, steps,
+/// dt_crit and the clock started at setup.
 type RunParts<'a> = (
-    &'a Model,
+    BodyShape<'a>,
     &'a [Receiver],
     &'a RunConfig,
     usize,
@@ -551,12 +621,12 @@ type RunParts<'a> = (
 );
 
 /// Drives a central-difference stepper with the standard observers and reports.
-fn finish_explicit<C: ContactLaw>(
-    mut stepper: CentralDifference<'_, Fem<'_>, C>,
-    (model, receivers, config, steps, dt_crit, setup): RunParts<'_>,
+fn finish_explicit<D: Discretisation, C: ContactLaw>(
+    mut stepper: CentralDifference<'_, D, C>,
+    (body, receivers, config, steps, dt_crit, setup): RunParts<'_>,
 ) -> Result<RunOutput> {
     let mut observers =
-        StandardObservers::new(model, receivers, config, steps, &mut stepper, dt_crit);
+        StandardObservers::new(body, receivers, config, steps, &mut stepper, dt_crit);
     let setup_time_s = setup.elapsed().as_secs_f64();
     let clock = Instant::now();
     observers.drive(&mut stepper, steps, config.progress)?;
@@ -567,12 +637,12 @@ fn finish_explicit<C: ContactLaw>(
         &observers.ledger.ledger,
         times,
         steps,
-        model.dofs(),
+        body.dofs,
         (dt, dt_crit),
     );
     let (contact, series) = stepper.finish().finish(steps, dt).unzip();
     report.contact = contact;
-    Ok(observers.output(model, receivers, report, series))
+    Ok(observers.output(body, receivers, report, series))
 }
 
 /// Newmark average acceleration on a T3 model with the standard observers.
@@ -590,7 +660,13 @@ fn run_newmark(
     let dt = config
         .dt_s
         .ok_or_else(|| Error::invalid("dt_s", "none", "Newmark needs an explicit time step"))?;
-    let steps = run_steps(model, sources.len(), receivers.len(), config, dt)?;
+    let node_x = |node: usize| model.mesh.nodes[node][0];
+    let body = BodyShape {
+        dofs: model.dofs(),
+        crack: model.crack.as_ref(),
+        node_x: &node_x,
+    };
+    let steps = run_steps(body, sources.len(), receivers.len(), config, dt)?;
     let forced = SampledSources::new(sources, dt, steps + 1)?;
     let mut stepper = Newmark::new(
         model,
@@ -600,14 +676,8 @@ fn run_newmark(
         config.initial_displacement.as_deref(),
         config.initial_velocity.as_deref(),
     )?;
-    let mut observers = StandardObservers::new(
-        model,
-        receivers,
-        config,
-        steps,
-        &mut stepper,
-        stab.dt_crit_s,
-    );
+    let mut observers =
+        StandardObservers::new(body, receivers, config, steps, &mut stepper, stab.dt_crit_s);
     let setup_time_s = setup.elapsed().as_secs_f64();
     let clock = Instant::now();
     observers.drive(&mut stepper, steps, config.progress)?;
@@ -625,7 +695,7 @@ fn run_newmark(
         model.dofs(),
         (dt, stab.dt_crit_s),
     );
-    Ok(observers.output(model, receivers, report, None))
+    Ok(observers.output(body, receivers, report, None))
 }
 
 /// Nodal weights of a segment: each edge between consecutive `nodes` gives half its length

@@ -1,0 +1,136 @@
+//! The layered rectangle of a laminate as spectral elements, and the consistent loads of
+//! tractions on its sides.
+
+use super::gll::Gll;
+use super::SemModel;
+use crate::error::{Error, Result};
+use crate::laminate::Laminate;
+use crate::mesh::Side;
+use serde::{Deserialize, Serialize};
+
+/// How a laminate is cut into spectral elements: one order along x for the grid, element rows
+/// aligned with the layers (a thick layer split into rows of at most `element_size_y_m`), and
+/// per row the highest order up to `max_order_y` whose smallest GLL gap across the row is no
+/// smaller than the smallest gap along x, so thin layers take a low order and do not set the
+/// time step (horizontal element edges carry only x-direction points: still conforming).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SemSpec {
+    /// Polynomial order along x.
+    pub order_x: usize,
+    /// Highest polynomial order across an element row.
+    pub max_order_y: usize,
+    /// Element width along x (m); the width is divided into equal elements no wider.
+    pub element_size_x_m: f64,
+    /// Largest element height across a layer (m).
+    pub element_size_y_m: f64,
+}
+
+impl Default for SemSpec {
+    /// Order 4 on 0.5 mm x 0.25 mm elements: about 5 points per shear wavelength of epoxy at
+    /// 2 MHz along x (the T3 quick scene resolves it with about 17 nodes).
+    fn default() -> Self {
+        SemSpec {
+            order_x: 4,
+            max_order_y: 4,
+            element_size_x_m: 0.5e-3,
+            element_size_y_m: 0.25e-3,
+        }
+    }
+}
+
+/// Smallest gap between the GLL points of order `p` on an element of size `h`.
+fn smallest_gap(h: f64, p: usize) -> f64 {
+    let g = Gll::new(p);
+    0.5 * h * (g.points[1] - g.points[0])
+}
+
+impl SemModel {
+    /// The laminate's layers (bottom first) over `width_m` as spectral elements cut as `spec`
+    /// says, with no constraints or dashpots yet.
+    pub fn layered(laminate: &Laminate, width_m: f64, spec: &SemSpec) -> Result<SemModel> {
+        for (name, size) in [
+            ("element_size_x_m", spec.element_size_x_m),
+            ("element_size_y_m", spec.element_size_y_m),
+        ] {
+            if !(size.is_finite() && size > 0.0) {
+                return Err(Error::invalid(name, size, "must be finite and > 0"));
+            }
+        }
+        if !(width_m.is_finite() && width_m > 0.0) {
+            return Err(Error::invalid("width_m", width_m, "must be finite and > 0"));
+        }
+        let mut interfaces = vec![0.0];
+        for layer in &laminate.layers {
+            interfaces.push(interfaces[interfaces.len() - 1] + layer.thickness_m);
+        }
+        let rows_m = crate::mesh::subdivide(&interfaces, spec.element_size_y_m);
+        let row_material = rows_m
+            .windows(2)
+            .map(|w| {
+                let middle = 0.5 * (w[0] + w[1]);
+                let layer = interfaces.partition_point(|&y| y <= middle) - 1;
+                laminate.layers[layer].material
+            })
+            .collect();
+        let columns_m = crate::mesh::subdivide(&[0.0, width_m], spec.element_size_x_m);
+        let columns = columns_m.len() - 1;
+        let x_gap = smallest_gap(width_m / columns as f64, spec.order_x.max(1));
+        let order_y: Vec<usize> = rows_m
+            .windows(2)
+            .map(|w| {
+                (1..=spec.max_order_y.max(1))
+                    .rev()
+                    .find(|&p| smallest_gap(w[1] - w[0], p) >= x_gap)
+                    .unwrap_or(1)
+            })
+            .collect();
+        SemModel::new(
+            columns_m,
+            rows_m,
+            spec.order_x,
+            &order_y,
+            laminate.materials.clone(),
+            row_material,
+        )
+    }
+
+    /// The consistent load of a unit uniform traction on the part [from_m, to_m] of `side`
+    /// (x along the bottom and top, y along the left and right): per node, the integral of its
+    /// Lagrange polynomial over the part, f_k = int l_k(s) ds. Each element's share is
+    /// integrated by GLL quadrature of one order more than the element's on the overlap, exact
+    /// for the polynomial l_k; a part covering whole elements gets the GLL edge weights.
+    pub fn side_load(&self, side: Side, from_m: f64, to_m: f64) -> Vec<(usize, f64)> {
+        let mut load = std::collections::BTreeMap::<usize, f64>::new();
+        let (lines, rules, last): (&[f64], Vec<&Gll>, usize) = match side {
+            Side::Bottom | Side::Top => (
+                &self.columns_m,
+                vec![&self.gll_x; self.columns_m.len() - 1],
+                self.y_nodes_m.len() - 1,
+            ),
+            Side::Left | Side::Right => (&self.rows_m, self.gll_y.iter().collect(), self.nx() - 1),
+        };
+        let node = |e: usize, a: usize| match side {
+            Side::Bottom => self.node(e * self.gll_x.order() + a, 0),
+            Side::Top => self.node(e * self.gll_x.order() + a, last),
+            Side::Left => self.node(0, self.first_line[e] + a),
+            Side::Right => self.node(last, self.first_line[e] + a),
+        };
+        for (e, rule) in rules.iter().enumerate() {
+            let (x0, x1) = (lines[e], lines[e + 1]);
+            let (a, b) = (from_m.max(x0), to_m.min(x1));
+            if b <= a {
+                continue;
+            }
+            let fine = Gll::new(rule.order() + 1);
+            for (&xi, &w) in fine.points.iter().zip(&fine.weights) {
+                let s = 0.5 * (a + b) + 0.5 * (b - a) * xi;
+                let local = (2.0 * s - x0 - x1) / (x1 - x0);
+                for (k, l) in rule.lagrange_at(local).iter().enumerate() {
+                    *load.entry(node(e, k)).or_default() += 0.5 * (b - a) * w * l;
+                }
+            }
+        }
+        load.into_iter().filter(|&(_, f)| f != 0.0).collect()
+    }
+}
