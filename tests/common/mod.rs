@@ -40,17 +40,7 @@ pub fn strip(
     shear: bool,
     bottom: BottomEdge,
 ) -> Model {
-    let materials: Vec<Material> = layers_top_down.iter().map(|l| l.0.clone()).collect();
-    let layers = layers_top_down
-        .iter()
-        .enumerate()
-        .rev()
-        .map(|(i, l)| Layer {
-            material: i,
-            thickness_m: l.1,
-        })
-        .collect();
-    let lam = Laminate::from_layers(materials, layers).unwrap();
+    let lam = laminate(layers_top_down);
     let mesh = Mesh::layered(&lam, h * columns as f64, h, h, &[], &[]).unwrap();
     let component = if shear { 1 } else { 0 };
     let mut fixed: Vec<usize> = [Side::Left, Side::Right]
@@ -161,4 +151,141 @@ impl Drop for TempDir {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
     }
+}
+
+/// How a wave test discretises its strip.
+#[derive(Clone, Copy, Debug)]
+pub enum Discretisation {
+    /// Linear triangles with elements of `h`, 4 columns wide ([`strip`]).
+    T3 { h: f64 },
+    /// Spectral elements of `order`, one element `width` wide, element rows no taller.
+    Sem { order: usize, width: f64 },
+}
+
+/// A vertical strip as [`strip`] describes it, in either discretisation, with what the wave
+/// tests do to it: a traction on the top, receivers across the strip at a depth, a run.
+pub enum WaveStrip {
+    /// Linear triangles.
+    T3(Model),
+    /// Spectral elements and their Lanczos critical step.
+    Sem(trnews::sem::SemModel, f64),
+}
+
+impl WaveStrip {
+    /// The strip of `layers_top_down` with rollers on the sides (u_x held for P waves, u_y
+    /// for S waves) and the `bottom` edge.
+    pub fn new(
+        how: Discretisation,
+        layers_top_down: &[(Material, f64)],
+        shear: bool,
+        bottom: BottomEdge,
+    ) -> WaveStrip {
+        let (order, width) = match how {
+            Discretisation::T3 { h } => {
+                return WaveStrip::T3(strip(layers_top_down, h, 4, shear, bottom))
+            }
+            Discretisation::Sem { order, width } => (order, width),
+        };
+        let cut = trnews::sem::SemSpec {
+            order_x: order,
+            max_order_y: order,
+            element_size_x_m: width,
+            element_size_y_m: width,
+        };
+        let mut m =
+            trnews::sem::SemModel::layered(&laminate(layers_top_down), width, &cut).unwrap();
+        let (last, lines) = (m.x_nodes_m.len() - 1, m.y_nodes_m.len());
+        let held = usize::from(shear);
+        m.fixed_dofs = (0..lines)
+            .flat_map(|j| [2 * m.node(0, j) + held, 2 * m.node(last, j) + held])
+            .collect();
+        match bottom {
+            BottomEdge::Absorbing => m.dashpots = m.lysmer_dashpots(&[Side::Bottom]),
+            BottomEdge::Fixed => {
+                let bottom: Vec<usize> = (0..=last)
+                    .flat_map(|i| [2 * m.node(i, 0), 2 * m.node(i, 0) + 1])
+                    .collect();
+                m.fixed_dofs.extend(bottom);
+            }
+            BottomEdge::Free => {}
+        }
+        let mut free = vec![true; m.dofs()];
+        for &d in &m.fixed_dofs {
+            free[d] = false;
+        }
+        let dt_crit = 2.0 / m.max_eigenvalue(&free).0.sqrt();
+        WaveStrip::Sem(m, dt_crit)
+    }
+
+    /// A uniform traction over the top in direction `angle_deg` (counter-clockwise from +x).
+    pub fn top_traction(&self, angle_deg: f64, signal: Signal) -> Source {
+        match self {
+            WaveStrip::T3(model) => top_traction(model, angle_deg, signal),
+            WaveStrip::Sem(m, _) => {
+                let (s, c) = angle_deg.to_radians().sin_cos();
+                let width = m.columns_m[m.columns_m.len() - 1];
+                let weights = m
+                    .side_load(Side::Top, 0.0, width)
+                    .into_iter()
+                    .flat_map(|(n, w)| [(2 * n, c * w), (2 * n + 1, s * w)])
+                    .collect();
+                Source { weights, signal }
+            }
+        }
+    }
+
+    /// Velocity component averaged across the strip at `depth` below the top (snapped to a
+    /// node row; for spectral elements with the GLL weights along x).
+    pub fn depth_receiver(&self, depth: f64, component: usize) -> Receiver {
+        match self {
+            WaveStrip::T3(model) => depth_receiver(model, depth, component),
+            WaveStrip::Sem(m, _) => {
+                let (ys, width) = (&m.y_nodes_m, m.columns_m[m.columns_m.len() - 1]);
+                let y = ys[ys.len() - 1] - depth;
+                let j = (0..ys.len())
+                    .min_by(|&a, &b| (ys[a] - y).abs().total_cmp(&(ys[b] - y).abs()))
+                    .unwrap();
+                let weights = m
+                    .side_load(Side::Bottom, 0.0, width)
+                    .into_iter()
+                    .map(|(n, w)| (2 * m.node(n % m.nx(), j) + component, w / width))
+                    .collect();
+                Receiver {
+                    name: format!("depth {depth}"),
+                    weights,
+                    quantity: Quantity::Velocity,
+                }
+            }
+        }
+    }
+
+    /// Runs the strip (central differences at `config`'s step or 0.9 dt_crit).
+    pub fn run(
+        &self,
+        sources: &[Source],
+        receivers: &[Receiver],
+        config: &trnews::solve::RunConfig,
+    ) -> trnews::error::Result<trnews::solve::RunOutput> {
+        match self {
+            WaveStrip::T3(model) => trnews::solve::run(model, sources, receivers, config),
+            WaveStrip::Sem(m, dt_crit) => {
+                trnews::solve::run_central_difference_on(m, *dt_crit, sources, receivers, config)
+            }
+        }
+    }
+}
+
+/// The laminate of layers listed top-down as (material, thickness).
+fn laminate(layers_top_down: &[(Material, f64)]) -> Laminate {
+    let materials: Vec<Material> = layers_top_down.iter().map(|l| l.0.clone()).collect();
+    let layers = layers_top_down
+        .iter()
+        .enumerate()
+        .rev()
+        .map(|(i, l)| Layer {
+            material: i,
+            thickness_m: l.1,
+        })
+        .collect();
+    Laminate::from_layers(materials, layers).unwrap()
 }
