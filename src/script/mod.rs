@@ -484,6 +484,25 @@ impl Host {
         api_listing(&self.engine)
     }
 
+    /// Writes Rhai definition files (`.d.rhai`) of the whole API into `dir` (`--definitions`):
+    /// one per module (`scene.d.rhai`, ...), the global functions and types
+    /// (`__static__.d.rhai`), Rhai's built-ins, and the `--set` parameters
+    /// (`__scope__.d.rhai`). The Rhai language server reads them to complete and check
+    /// scripts. Returns the files written.
+    pub fn write_definitions(&self, dir: &Path) -> Result<Vec<PathBuf>, ScriptError> {
+        let scope = self.scope();
+        self.engine
+            .definitions_with_scope(&scope)
+            .iter_files()
+            .map(|(name, text)| {
+                let file = dir.join(name);
+                crate::io::write_atomic(&file, text.as_bytes())
+                    .map(|()| file)
+                    .map_err(|e| ScriptError::new("--definitions", e.to_string()))
+            })
+            .collect()
+    }
+
     fn compile(&self, name: &str, text: &str) -> Result<AST, ScriptError> {
         let mut ast = self
             .engine
