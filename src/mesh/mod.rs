@@ -565,9 +565,11 @@ mod tests {
             );
         }
         // every element lies inside one layer: its material is that layer's
+        let layers = mesh.element_layers().unwrap();
         for (e, t) in mesh.triangles.iter().enumerate() {
             let yc = t.iter().map(|&n| mesh.nodes[n][1]).sum::<f64>() / 3.0;
             let layer = lam.interfaces_m().partition_point(|&y| y <= yc) - 1;
+            assert_eq!(layers[e], layer);
             assert_eq!(mesh.element_material[e], lam.layers[layer].material);
         }
         assert!(rows
