@@ -184,6 +184,52 @@ fn pvd_lists_three_snapshots_with_their_times() {
     meshio_check(&files[2]);
 }
 
+/// `scene::write_pvd` from a script: one VTU per snapshot of a run beside the collection,
+/// listed with the snapshots' times, each with the scene's point and cell counts.
+#[test]
+fn script_writes_a_snapshot_series() {
+    use trnews::script::{Host, HostOptions};
+    let dir = TempDir::new("pvd-script");
+    let script = dir.path().join("series.rhai");
+    let text = "let s = scene::preset(\"smoke\", #{});\n\
+                let run = s.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{duration_s: 20.0 * s.dt, snapshot_every: 5});\n\
+                scene::write_pvd(\"anim/field.pvd\", s, run);\n";
+    std::fs::write(&script, text).unwrap();
+    let out = dir.path().join("out");
+    let host = Host::new(HostOptions {
+        out_dir: out.clone(),
+        quiet: true,
+        ..HostOptions::default()
+    })
+    .unwrap();
+    host.run_file(&script).expect("script runs");
+    let pvd = out.join("anim/field.pvd");
+    let entries = collection_entries(&std::fs::read_to_string(&pvd).expect("collection"));
+    assert!(entries.len() >= 3, "{entries:?}");
+    assert!(
+        entries.windows(2).all(|w| w[1].0 > w[0].0),
+        "times increase"
+    );
+    for (k, (_, file)) in entries.iter().enumerate() {
+        assert_eq!(file, &format!("field_{:03}.vtu", k + 1));
+        let vtk = vtkio::Vtk::import(pvd.with_file_name(file)).expect("snapshot reads");
+        let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+            panic!("not an unstructured grid");
+        };
+        let piece = pieces
+            .into_iter()
+            .next()
+            .unwrap()
+            .into_loaded_piece_data(None)
+            .unwrap();
+        assert!(piece.num_points() > 0 && piece.cells.num_cells() > 0);
+        assert_eq!(
+            array(&piece.data.cell, "layer").len(),
+            piece.cells.num_cells()
+        );
+    }
+}
+
 /// If python3 with meshio is present, read the VTU there too (skipped otherwise, saying why).
 fn meshio_check(vtu: &Path) {
     let code = format!(

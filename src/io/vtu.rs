@@ -1,15 +1,17 @@
 //! Binary VTK XML UnstructuredGrid files (`.vtu`) for ParaView: triangles with point fields
 //! (displacement, ...) and cell data (`material`, `layer`).
 //!
-//! Written by hand rather than through vtkio: the format is a short XML header plus raw
+//! Written by hand rather than through vtkio: the format is a short XML skeleton around
 //! little-endian arrays, and vtkio would bring its old parser stack (nom 3, quick-xml 0.22,
-//! rejected by future Rust versions) into the library. The arrays go in one
-//! `<AppendedData encoding="raw">` block, each prefixed by its byte count as a UInt64
-//! (`header_type="UInt64"`), which is what ParaView's own writer produces by default; the
-//! tests read the files back with vtkio.
+//! rejected by future Rust versions) into the library. Each array is inline binary
+//! (`format="binary"`): base64 of its byte count as a UInt64 (`header_type="UInt64"`)
+//! followed by its values, as ParaView's writer does in its binary mode. (Raw appended
+//! bytes would be smaller, but XML readers such as vtkio stop at bytes like `<?` in them.)
+//! The tests read the files back with vtkio, and with meshio when it is installed.
 
 use super::{write_atomic, OutputError};
 use crate::mesh::Mesh;
+use base64::prelude::{Engine as _, BASE64_STANDARD};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -25,7 +27,7 @@ pub struct Field<'a> {
     pub values: &'a [f64],
 }
 
-/// Writes `mesh` with `point_data` and `cell_data` as a binary `.vtu`. The cell data also
+/// Writes `mesh` with `point_data` and `cell_data` as a binary (base64) `.vtu`. The cell data also
 /// holds the mesh's `material` index of every triangle and, for a layered mesh, its `layer`
 /// (0 at the bottom). Points get z = 0; triangles are VTK cell type 5. All values must be
 /// finite.
@@ -102,25 +104,24 @@ pub(super) fn xml_attr(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// The XML part of a file being built and its appended binary block.
+/// The XML of a file being built, arrays inline.
 #[derive(Default)]
-struct Appended {
+struct Arrays {
     xml: String,
-    data: Vec<u8>,
 }
 
-impl Appended {
-    /// Declares a `<DataArray>` with `attrs` whose values are `bytes`, appended to the
-    /// binary block behind its UInt64 byte count.
+impl Arrays {
+    /// Writes a `<DataArray>` with `attrs` whose values are `bytes`: base64 of their UInt64
+    /// byte count followed by them.
     fn array(&mut self, attrs: &str, bytes: &[u8]) {
+        let mut block = Vec::with_capacity(8 + bytes.len());
+        block.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
+        block.extend_from_slice(bytes);
         let _ = writeln!(
             self.xml,
-            "        <DataArray {attrs} format=\"appended\" offset=\"{}\"/>",
-            self.data.len()
+            "        <DataArray {attrs} format=\"binary\">\n          {}\n        </DataArray>",
+            BASE64_STANDARD.encode(&block)
         );
-        self.data
-            .extend_from_slice(&(bytes.len() as u64).to_le_bytes());
-        self.data.extend_from_slice(bytes);
     }
 
     /// Declares a Float64 array of `field`, 2-vectors padded with z = 0.
@@ -160,7 +161,7 @@ fn le_bytes<T: Copy, const N: usize>(values: &[T], to_le: fn(T) -> [u8; N]) -> V
 
 /// Builds the bytes of a VTU file from already-checked inputs.
 fn vtu_bytes(mesh: &Mesh, point_data: &[Field], cell_data: &[Field]) -> Vec<u8> {
-    let mut a = Appended::default();
+    let mut a = Arrays::default();
     a.xml.push_str("<?xml version=\"1.0\"?>\n");
     a.xml.push_str(
         "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
@@ -202,10 +203,6 @@ fn vtu_bytes(mesh: &Mesh, point_data: &[Field], cell_data: &[Field]) -> Vec<u8> 
         &vec![5u8; mesh.triangles.len()],
     );
     a.xml
-        .push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n");
-    a.xml.push_str("  <AppendedData encoding=\"raw\">\n   _");
-    let mut bytes = a.xml.into_bytes();
-    bytes.extend_from_slice(&a.data);
-    bytes.extend_from_slice(b"\n  </AppendedData>\n</VTKFile>\n");
-    bytes
+        .push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
+    a.xml.into_bytes()
 }

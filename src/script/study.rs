@@ -198,7 +198,7 @@ mod study_api {
 }
 
 /// One CSV row of a work-precision study; the field names are the column names.
-#[derive(serde::Serialize)]
+#[derive(Serialize)]
 struct WorkPrecisionRow<'a> {
     integrator: &'a str,
     element_size_m: RoundTrip,
@@ -213,7 +213,7 @@ struct WorkPrecisionRow<'a> {
 
 impl<'a> WorkPrecisionRow<'a> {
     /// The row of point `p`.
-    fn of(p: &'a crate::study::WorkPrecisionPoint) -> Self {
+    fn of(p: &'a WorkPrecisionPoint) -> Self {
         WorkPrecisionRow {
             integrator: &p.integrator,
             element_size_m: RoundTrip(p.element_size_m),
