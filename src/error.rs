@@ -77,9 +77,6 @@ pub enum Error {
     /// Writing an output file failed.
     #[error(transparent)]
     Output(#[from] crate::io::OutputError),
-    /// Rendering a figure failed.
-    #[error(transparent)]
-    Plot(#[from] crate::plot::PlotError),
 }
 
 impl From<crate::budget::Stop> for Error {

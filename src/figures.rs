@@ -1,14 +1,34 @@
 //! The report's figures from library results: each function turns a result into a
 //! [`crate::plot`] call with titles, units and legends (PNG or SVG by extension).
 
-use crate::error::{Error, Result};
-use crate::plot::{field_plot, line_plot, stacked_plot, Axes, Overlay, Panel, Scale, Series};
+use crate::error::Error;
+use crate::plot::{
+    field_plot, line_plot, stacked_plot, Axes, Overlay, Panel, PlotError, Scale, Series,
+};
 use crate::scene::Scene;
 use crate::signal::{self, Signal, Window};
 use crate::solve::{EnergyLedger, Snapshot};
 use crate::study::WorkPrecisionPoint;
 use crate::trnews::{Delayed, TrNews};
 use std::path::Path;
+
+/// Failure to make one of the report's figures: in the data it is drawn from, or in drawing it.
+/// The core [`Error`] knows nothing of plotting; the script host shows either kind by its message.
+#[derive(Debug, thiserror::Error)]
+pub enum FigureError {
+    /// The result cannot be turned into a figure (e.g. a window outside a signal).
+    #[error(transparent)]
+    Data(#[from] Error),
+    /// Signal processing for the figure failed (e.g. a spectrum).
+    #[error(transparent)]
+    Signal(#[from] crate::signal::SignalError),
+    /// Rendering or writing the figure failed.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+}
+
+/// Result of a figure function.
+pub type Result<T> = std::result::Result<T, FigureError>;
 
 fn axes(title: &str, x_label: &str, y_label: &str) -> Axes {
     Axes {
@@ -213,11 +233,11 @@ pub fn scattered_snapshot(
         twin[p.slave] = p.master;
     }
     if twin.iter().any(|&n| n >= tied_nodes) || (snap.time_s - tied.time_s).abs() > 1e-12 {
-        return Err(Error::invalid(
+        return Err(FigureError::Data(Error::invalid(
             "uncracked run",
             format!("{tied_nodes} nodes at t = {:e} s", tied.time_s),
             "must be the crack-tied companion's snapshot at the same time",
-        ));
+        )));
     }
     let scattered: Vec<f64> = twin
         .iter()

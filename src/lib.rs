@@ -3,7 +3,12 @@
 //! "Simulation of defects in CFRP and delayed TR-NEWS analysis" (Mech 320/17).
 //!
 //! Data flows one way: [`laminate`] -> [`mesh`] -> [`fem`] -> [`solve`] -> [`signal`] /
-//! [`trnews`] -> [`plot`] / [`io`]. [`scene`] describes a whole experiment setup.
+//! [`trnews`] -> `plot` / [`io`]. [`scene`] describes a whole experiment setup.
+//!
+//! Cargo features, all on by default, add the edges around the numerical core:
+//! `plot` (figures: `plot`, `figures`), `io` (CSV, VTU/PVD, data inputs: `input`),
+//! `script` (the Rhai API: `script`) and `cli` (the `trnews-script` binary, `slurm`).
+//! `cargo build --no-default-features` builds the numerics alone, writing NPY and JSON.
 
 pub mod accuracy;
 pub mod budget;
@@ -11,19 +16,24 @@ pub mod contact;
 pub mod error;
 pub mod exact;
 pub mod fem;
+#[cfg(feature = "plot")]
 pub mod figures;
 pub mod format;
+#[cfg(feature = "io")]
 pub mod input;
 pub mod io;
 pub mod lab;
 pub mod laminate;
 pub mod material;
 pub mod mesh;
+#[cfg(feature = "plot")]
 pub mod plot;
 pub mod scene;
+#[cfg(feature = "script")]
 pub mod script;
 pub mod sem;
 pub mod signal;
+#[cfg(feature = "cli")]
 pub mod slurm;
 pub mod solve;
 pub mod study;

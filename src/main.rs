@@ -30,7 +30,7 @@ fn heap_use() -> trnews::budget::HeapUse {
 )]
 struct Cli {
     /// The script to run, e.g. scripts/sweep_delays.rhai.
-    #[arg(required_unless_present = "api")]
+    #[arg(required_unless_present_any = ["api", "definitions"])]
     script: Option<PathBuf>,
     /// Directory that every output path of the script is resolved under.
     #[arg(long, default_value = ".")]
@@ -63,6 +63,10 @@ struct Cli {
     /// List every function the scripting API offers, with descriptions, and exit.
     #[arg(long)]
     api: bool,
+    /// Write Rhai definition files (.d.rhai) of the whole API into DIR, for editors with the
+    /// Rhai language server, and exit (see the README).
+    #[arg(long, value_name = "DIR")]
+    definitions: Option<PathBuf>,
     /// Compute only share I of N of every sweep's points, then stop (default inside a Slurm
     /// array job: SLURM_ARRAY_TASK_ID / SLURM_ARRAY_TASK_COUNT).
     #[arg(long, value_name = "I/N")]
@@ -152,6 +156,17 @@ fn run(cli: &Cli) -> Result<(), ScriptError> {
     })?;
     if cli.api {
         print_api(&host);
+        return Ok(());
+    }
+    if let Some(dir) = &cli.definitions {
+        let files = host.write_definitions(dir)?;
+        if !cli.quiet {
+            eprintln!(
+                "{} definition files written to {}",
+                files.len(),
+                dir.display()
+            );
+        }
         return Ok(());
     }
     let Some(script) = &cli.script else {

@@ -242,6 +242,54 @@ fn api_lists_functions_with_descriptions() {
 }
 
 #[test]
+fn definitions_describe_the_api_for_editors() {
+    let dir = TempDir::new("cli-definitions");
+    let defs = dir.path().join("defs");
+    let o = cli(
+        dir.path(),
+        &[
+            "--set",
+            "resolution=smoke",
+            "--definitions",
+            defs.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let read = |name: &str| {
+        std::fs::read_to_string(defs.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let scene = read("scene.d.rhai");
+    assert!(scene.starts_with("module scene;"), "{scene}");
+    assert!(
+        scene.contains("fn preset(name: string, overrides: map) -> Scene;"),
+        "{scene}"
+    );
+    assert!(scene.contains("fn write_pvd(path: string, scene: Scene, run: Run)"));
+    let trnews = read("trnews.d.rhai");
+    assert!(
+        trnews.contains("fn tr_news(r: Responder, spec: map) -> TrNews;"),
+        "{trnews}"
+    );
+    assert!(read("signal.d.rhai").contains("/// Hilbert envelope"));
+    assert!(read("__scope__.d.rhai").contains("const resolution"));
+    for name in [
+        "__static__.d.rhai",
+        "__builtin__.d.rhai",
+        "plot.d.rhai",
+        "io.d.rhai",
+    ] {
+        assert!(defs.join(name).is_file(), "{name} missing");
+    }
+    let all: String = ["scene", "trnews", "signal", "study"]
+        .map(|m| read(&format!("{m}.d.rhai")))
+        .concat();
+    assert!(
+        !all.contains("Res<") && !all.contains("SceneRef"),
+        "Rust type names left"
+    );
+}
+
+#[test]
 fn set_values_reach_the_script() {
     let dir = TempDir::new("cli-set");
     let text = "assert(param(\"n\", 1) == 7, \"n\");\nassert(n == 7, \"constant\");\n\

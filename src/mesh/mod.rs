@@ -111,6 +111,11 @@ pub struct Crack {
     pub pairs: Vec<CrackPair>,
 }
 
+/// The layer holding height `y` given the interface heights from the bottom face up.
+fn layer_at(interfaces: &[f64], y: f64) -> usize {
+    interfaces.partition_point(|&h| h <= y).saturating_sub(1)
+}
+
 /// Relative tolerance on the number of elements per interval: an interval that is a whole
 /// number of element sizes up to round-off (12e-3 / 50e-6 = 240.00000000000003) gets that
 /// number, not one more.
@@ -208,6 +213,21 @@ impl Mesh {
         Ok(Self::from_grid(grid, &interfaces, &layer_material))
     }
 
+    /// The layer (0 at the bottom) of every triangle, from its centroid's height and the
+    /// layer interfaces; `None` for a mesh without interfaces (a Gmsh import).
+    pub fn element_layers(&self) -> Option<Vec<usize>> {
+        if self.interfaces_y_m.is_empty() {
+            return None;
+        }
+        let centroid_y = |t: &[usize; 3]| t.iter().map(|&n| self.nodes[n][1]).sum::<f64>() / 3.0;
+        Some(
+            self.triangles
+                .iter()
+                .map(|t| layer_at(&self.interfaces_y_m, centroid_y(t)))
+                .collect(),
+        )
+    }
+
     fn from_grid(grid: Grid, interfaces: &[f64], layer_material: &[usize]) -> Mesh {
         let (nxn, nyn) = (grid.x_m.len(), grid.y_m.len());
         let mut nodes = Vec::with_capacity(nxn * nyn);
@@ -220,9 +240,7 @@ impl Mesh {
         let mut element_material = Vec::with_capacity(triangles.capacity());
         for j in 0..nyn - 1 {
             let y_mid = 0.5 * (grid.y_m[j] + grid.y_m[j + 1]);
-            let layer = interfaces
-                .partition_point(|&y| y <= y_mid)
-                .saturating_sub(1);
+            let layer = layer_at(interfaces, y_mid);
             let material = layer_material[layer.min(layer_material.len() - 1)];
             for i in 0..nxn - 1 {
                 let n00 = j * nxn + i;
@@ -547,9 +565,11 @@ mod tests {
             );
         }
         // every element lies inside one layer: its material is that layer's
+        let layers = mesh.element_layers().unwrap();
         for (e, t) in mesh.triangles.iter().enumerate() {
             let yc = t.iter().map(|&n| mesh.nodes[n][1]).sum::<f64>() / 3.0;
             let layer = lam.interfaces_m().partition_point(|&y| y <= yc) - 1;
+            assert_eq!(layers[e], layer);
             assert_eq!(mesh.element_material[e], lam.layers[layer].material);
         }
         assert!(rows

@@ -485,6 +485,30 @@ impl Host {
         api_listing(&self.engine)
     }
 
+    /// Writes Rhai definition files (`.d.rhai`) of the whole API into `dir` (`--definitions`):
+    /// one per module (`scene.d.rhai`, ...), the global functions and types
+    /// (`__static__.d.rhai`), Rhai's built-ins, and the `--set` parameters
+    /// (`__scope__.d.rhai`). The Rhai language server reads them to complete and check
+    /// scripts. Returns the files written.
+    pub fn write_definitions(&self, dir: &Path) -> Result<Vec<PathBuf>, ScriptError> {
+        let scope = self.scope();
+        // Rhai yields the scope's file once per item: keep each file once.
+        let files: BTreeMap<String, String> = self
+            .engine
+            .definitions_with_scope(&scope)
+            .iter_files()
+            .collect();
+        files
+            .into_iter()
+            .map(|(name, text)| {
+                let file = dir.join(name);
+                crate::io::write_atomic(&file, definition_types(&text).as_bytes())
+                    .map(|()| file)
+                    .map_err(|e| ScriptError::new("--definitions", e.to_string()))
+            })
+            .collect()
+    }
+
     fn compile(&self, name: &str, text: &str) -> Result<AST, ScriptError> {
         let mut ast = self
             .engine
@@ -737,15 +761,63 @@ fn script_type(rust: &str) -> String {
         "i64" | "INT" => "int",
         "str" | "String" | "ImmutableString" => "string",
         "Dynamic" => "any",
-        "Map" => "map",
-        "Array" => "array",
-        "SceneRef" => "Scene",
-        "RunRef" => "Run",
-        "TrNewsRef" => "TrNews",
-        "LaminateRef" => "Laminate",
-        other => other,
+        other => SCRIPT_TYPE_NAMES
+            .iter()
+            .find(|(rust, _)| *rust == other)
+            .map_or(other, |(_, script)| script),
     }
     .to_string()
+}
+
+/// Rust type names in function signatures and the names scripts know them by.
+const SCRIPT_TYPE_NAMES: [(&str, &str); 6] = [
+    ("Map", "map"),
+    ("Array", "array"),
+    ("SceneRef", "Scene"),
+    ("RunRef", "Run"),
+    ("TrNewsRef", "TrNews"),
+    ("LaminateRef", "Laminate"),
+];
+
+/// A definition file with the script's type names: `Res<T >` (a fallible function) becomes
+/// `T`, and the Rust aliases of [`SCRIPT_TYPE_NAMES`] their script names.
+fn definition_types(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut open = Vec::new(); // for each '<' seen: whether it opened a `Res<`
+    let mut rest = text;
+    while let Some(c) = rest.chars().next() {
+        if c.is_ascii_alphabetic() || c == '_' {
+            let end = rest
+                .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                .unwrap_or(rest.len());
+            let word = &rest[..end];
+            rest = &rest[end..];
+            if word == "Res" && rest.starts_with('<') {
+                open.push(true);
+                rest = &rest[1..];
+                continue;
+            }
+            let script = SCRIPT_TYPE_NAMES.iter().find(|(rust, _)| *rust == word);
+            out.push_str(script.map_or(word, |(_, s)| s));
+            continue;
+        }
+        rest = &rest[c.len_utf8()..];
+        match c {
+            '-' if rest.starts_with('>') => {
+                out.push_str("->");
+                rest = &rest[1..];
+                continue;
+            }
+            '<' => open.push(false),
+            '>' if open.pop() == Some(true) => {
+                out.truncate(out.trim_end().len());
+                continue;
+            }
+            _ => {}
+        }
+        out.push(c);
+    }
+    out
 }
 
 /// The first paragraph of doc comment lines, without `///` markers, joined on one line.

@@ -303,7 +303,7 @@ mod scene_api {
         Ok(run.snapshots[index(&ctx, k, run.snapshots.len(), "snapshot")?].time_s)
     }
 
-    /// Writes snapshot `k` (1-based) of a run of `scene` as a VTU file for ParaView (displacement vector and material id).
+    /// Writes snapshot `k` (1-based) of a run of `scene` as a binary VTU file for ParaView: the displacement vector on the points, the material and layer index of every triangle.
     #[rhai_fn(global, return_raw)]
     pub fn write_vtu(
         ctx: NativeCallContext,
@@ -315,21 +315,50 @@ mod scene_api {
         let snap = &run.snapshots[index(&ctx, k, run.snapshots.len(), "snapshot")?];
         let file = crate::script::HostContext::of(&ctx)?
             .resolve_output(path)
-            .map_err(|e| super::error(&ctx, e))?;
-        let mesh = &scene.model.mesh;
-        let mut material = vec![0.0; mesh.nodes.len()];
-        for (t, &m) in mesh.triangles.iter().zip(&mesh.element_material) {
-            t.iter().for_each(|&n| material[n] = m as f64);
-        }
-        crate::io::write_vtu(
-            &file,
-            &mesh.nodes,
-            &mesh.triangles,
-            &[
-                ("displacement", 2, &snap.displacement),
-                ("material", 1, &material),
-            ],
-        )
-        .at(&ctx)
+            .at(&ctx)?;
+        snapshot_vtu(&file, &scene, snap).at(&ctx)
     }
+
+    /// Writes every snapshot of a run of `scene` as a binary VTU file beside the ParaView collection `path` (`.pvd`), named after it with the snapshot number (`field.pvd` -> `field_001.vtu`, ...), and the collection listing them with their times: ParaView opens it as an animation.
+    #[rhai_fn(global, return_raw)]
+    pub fn write_pvd(ctx: NativeCallContext, path: &str, scene: SceneRef, run: RunRef) -> Res<()> {
+        let collection = crate::script::HostContext::of(&ctx)?
+            .resolve_output(path)
+            .at(&ctx)?;
+        let files = series_files(&collection, run.snapshots.len());
+        for (file, snap) in files.iter().zip(&run.snapshots) {
+            snapshot_vtu(file, &scene, snap).at(&ctx)?;
+        }
+        let frames: Vec<(f64, &std::path::Path)> = run
+            .snapshots
+            .iter()
+            .zip(&files)
+            .map(|(snap, file)| (snap.time_s, file.as_path()))
+            .collect();
+        crate::io::write_pvd(&collection, &frames).at(&ctx)
+    }
+}
+
+/// Writes one snapshot of a run of `scene` as a VTU file (displacement on the points).
+fn snapshot_vtu(
+    file: &std::path::Path,
+    scene: &Scene,
+    snap: &crate::solve::Snapshot,
+) -> Result<(), crate::io::OutputError> {
+    let displacement = crate::io::vtu::Field {
+        name: "displacement",
+        components: 2,
+        values: &snap.displacement,
+    };
+    crate::io::write_vtu(file, &scene.model.mesh, &[displacement], &[])
+}
+
+/// The VTU files of a series of `count` snapshots beside the collection `pvd`:
+/// `<stem>_<k>.vtu`, k from 1, zero-padded to at least three digits.
+fn series_files(pvd: &std::path::Path, count: usize) -> Vec<std::path::PathBuf> {
+    let stem = pvd.file_stem().unwrap_or_default().to_string_lossy();
+    let width = count.to_string().len().max(3);
+    (1..=count)
+        .map(|k| pvd.with_file_name(format!("{stem}_{k:0width$}.vtu")))
+        .collect()
 }

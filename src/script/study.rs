@@ -2,6 +2,7 @@
 //! known answer), and `study::sweep`, a resumable, shardable map over parameter points.
 //! Type: `WorkPrecision`.
 
+use crate::io::csv::RoundTrip;
 use crate::study::WorkPrecisionPoint;
 use rhai::plugin::*;
 use rhai::{Array, Dynamic, Engine, Map, Module, NativeCallContext, INT};
@@ -191,36 +192,38 @@ mod study_api {
         let file = HostContext::of(&ctx)?
             .resolve_output(path)
             .map_err(|e| error(&ctx, e))?;
-        let headers: Vec<String> = [
-            "integrator",
-            "element_size_m",
-            "dt_s",
-            "dt_over_dt_crit",
-            "dofs",
-            "steps",
-            "error",
-            "run_time_s",
-            "energy_residual_peak",
-        ]
-        .map(String::from)
-        .to_vec();
-        let rows: Vec<Vec<String>> = wp
-            .iter()
-            .map(|p| {
-                let f = crate::io::fmt_f64;
-                vec![
-                    p.integrator.clone(),
-                    f(p.element_size_m),
-                    f(p.dt_s),
-                    f(p.stability_ratio),
-                    p.dofs.to_string(),
-                    p.report.steps.to_string(),
-                    f(p.error),
-                    f(p.run_time_s),
-                    f(p.report.energy_residual_peak),
-                ]
-            })
-            .collect();
-        crate::io::write_csv_rows(&file, &headers, &rows).at(&ctx)
+        let rows: Vec<WorkPrecisionRow> = wp.iter().map(WorkPrecisionRow::of).collect();
+        crate::io::csv::write_rows(&file, &rows).at(&ctx)
+    }
+}
+
+/// One CSV row of a work-precision study; the field names are the column names.
+#[derive(Serialize)]
+struct WorkPrecisionRow<'a> {
+    integrator: &'a str,
+    element_size_m: RoundTrip,
+    dt_s: RoundTrip,
+    dt_over_dt_crit: RoundTrip,
+    dofs: usize,
+    steps: usize,
+    error: RoundTrip,
+    run_time_s: RoundTrip,
+    energy_residual_peak: RoundTrip,
+}
+
+impl<'a> WorkPrecisionRow<'a> {
+    /// The row of point `p`.
+    fn of(p: &'a WorkPrecisionPoint) -> Self {
+        WorkPrecisionRow {
+            integrator: &p.integrator,
+            element_size_m: RoundTrip(p.element_size_m),
+            dt_s: RoundTrip(p.dt_s),
+            dt_over_dt_crit: RoundTrip(p.stability_ratio),
+            dofs: p.dofs,
+            steps: p.report.steps,
+            error: RoundTrip(p.error),
+            run_time_s: RoundTrip(p.run_time_s),
+            energy_residual_peak: RoundTrip(p.report.energy_residual_peak),
+        }
     }
 }
