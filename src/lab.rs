@@ -21,10 +21,13 @@
 //! is an error giving the length needed.
 
 use crate::error::{Error, Result};
+#[cfg(feature = "io")]
 use crate::input::{InputError, InputRoot};
 use crate::io::OutputRoot;
 use crate::signal::Signal;
-use crate::trnews::{Channel, Recording, Responder};
+#[cfg(feature = "io")]
+use crate::trnews::Recording;
+use crate::trnews::{Channel, Responder};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -47,6 +50,7 @@ const HOW: &str = "for each drive: copy `sent` into the lab directory, play it, 
 /// The contents of [`LAB_MANIFEST`].
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
+#[cfg(feature = "io")]
 struct LabManifest {
     recordings: Vec<RecordingFiles>,
 }
@@ -54,6 +58,7 @@ struct LabManifest {
 /// One recording of a lab directory: the files of the drive sent and of the traces received.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+#[cfg(feature = "io")]
 pub struct RecordingFiles {
     /// The drive, a 1-D .npy on the channel's step.
     pub sent: String,
@@ -63,6 +68,7 @@ pub struct RecordingFiles {
 
 /// Largest data file read (the file and its values are held at once): a quarter of the
 /// memory limit, as for the scripts' own reads.
+#[cfg(feature = "io")]
 fn read_limit() -> (u64, &'static str) {
     (
         crate::budget::memory_limit() / 4,
@@ -71,11 +77,13 @@ fn read_limit() -> (u64, &'static str) {
 }
 
 /// An input error as the library's error.
+#[cfg(feature = "io")]
 fn input(e: InputError) -> Error {
     Error::Named(e.to_string())
 }
 
 /// The bytes of `rel` beneath `root`, `None` when it does not exist.
+#[cfg(feature = "io")]
 fn read_if_present(root: &InputRoot, rel: &Path) -> Result<Option<Vec<u8>>> {
     let (limit, why) = read_limit();
     match root.read(&rel.to_string_lossy(), limit, why) {
@@ -90,6 +98,7 @@ fn read_if_present(root: &InputRoot, rel: &Path) -> Result<Option<Vec<u8>>> {
 /// Traces from the .npy file `rel` beneath `root` on step `dt_s`: a 1-D array is one trace,
 /// a 2-D array one trace per row (per receiver). For measured impulse responses and
 /// recorded traces.
+#[cfg(feature = "io")]
 pub fn read_traces(root: &InputRoot, rel: &str, dt_s: f64) -> Result<Vec<Signal>> {
     let (limit, why) = read_limit();
     let bytes = root.read(rel, limit, why).map_err(input)?;
@@ -103,6 +112,7 @@ pub fn read_traces(root: &InputRoot, rel: &str, dt_s: f64) -> Result<Vec<Signal>
 }
 
 /// The drive in the 1-D .npy file `rel` beneath `root`, on step `dt_s`.
+#[cfg(feature = "io")]
 fn read_drive(root: &InputRoot, rel: &str, dt_s: f64) -> Result<Signal> {
     match read_traces(root, rel, dt_s)?.as_slice() {
         [drive] => Ok(drive.clone()),
@@ -120,6 +130,7 @@ fn read_drive(root: &InputRoot, rel: &str, dt_s: f64) -> Result<Signal> {
 /// The recordings of the lab directory `dir` beneath `root`, on step `dt_s`: none when the
 /// directory has no [`LAB_MANIFEST`] yet (before the first phase); an error when the
 /// directory does not exist.
+#[cfg(feature = "io")]
 pub fn read_lab(root: &InputRoot, dir: &str, dt_s: f64) -> Result<Vec<Recording>> {
     if !root.is_dir(dir) {
         return Err(Error::invalid(
@@ -320,6 +331,7 @@ pub fn to_record_of(r: &Responder) -> Option<&Arc<ToRecord>> {
 
 /// A lab channel: the recordings of lab directory `dir` beneath `root` on step `dt_s`,
 /// answering every recorded drive and listing the others under `out_dir` (see [`ToRecord`]).
+#[cfg(feature = "io")]
 pub fn lab_channel(
     root: &InputRoot,
     dir: &str,
