@@ -14,7 +14,7 @@ pub mod npy;
 pub mod pvd;
 mod root;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 #[cfg(feature = "io")]
 pub mod vtu;
 

@@ -5,8 +5,9 @@ use serde::Serialize;
 use std::fs;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// A fresh, empty directory under the system temp dir, removed on drop.
-pub(super) struct TempDir(PathBuf);
+/// A fresh, empty directory under the system temp dir, removed on drop (the library's unit
+/// tests share it).
+pub(crate) struct TempDir(PathBuf);
 
 impl std::ops::Deref for TempDir {
     type Target = Path;
@@ -21,10 +22,10 @@ impl Drop for TempDir {
     }
 }
 
-pub(super) fn temp_dir(tag: &str) -> TempDir {
+pub(crate) fn temp_dir(tag: &str) -> TempDir {
     static N: AtomicU64 = AtomicU64::new(0);
     let n = N.fetch_add(1, Ordering::Relaxed);
-    let name = format!("plotio-io-{tag}-{}-{n}", std::process::id());
+    let name = format!("trnews-unit-{tag}-{}-{n}", std::process::id());
     let dir = std::env::temp_dir().join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create temp dir");

@@ -5,33 +5,7 @@ use super::heatmap::*;
 use super::line::*;
 use super::stacked::*;
 use super::*;
-use std::sync::atomic::{AtomicU64, Ordering};
-
-/// A fresh, empty directory under the system temp dir, removed on drop.
-struct TempDir(PathBuf);
-
-impl std::ops::Deref for TempDir {
-    type Target = Path;
-    fn deref(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn temp_dir(tag: &str) -> TempDir {
-    static N: AtomicU64 = AtomicU64::new(0);
-    let n = N.fetch_add(1, Ordering::Relaxed);
-    let name = format!("plotio-plot-{tag}-{}-{n}", std::process::id());
-    let dir = std::env::temp_dir().join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create temp dir");
-    TempDir(dir)
-}
+use crate::io::tests::temp_dir;
 
 fn axes(title: &str, xs: Scale, ys: Scale) -> Axes {
     Axes {
