@@ -1,6 +1,12 @@
 //! Time integration (report Sec. 4.8): explicit central difference with lumped mass
 //! (eqs 65-69) and Newmark average acceleration (eq 61), with sources, receivers, the
 //! energy ledger (Sec. 4.10.1), stability checks and a serialisable run report.
+//!
+//! The loop is built from parts a caller can use alone: a [`Discretisation`] (T3 [`Fem`] or
+//! spectral elements), a [`Stepper`] over it ([`CentralDifference`], generic over the
+//! contact law, or [`Newmark`]), [`Observer`]s ([`observers`]) and the one loop [`drive`].
+//! [`run`] assembles the standard run of a T3 model from them, and
+//! [`run_central_difference_on`] the same for any discretisation.
 
 pub mod discretisation;
 pub mod explicit;
