@@ -10,6 +10,9 @@
 //! `script` (the Rhai API: `script`) and `cli` (the `trnews-script` binary, `slurm`).
 //! `cargo build --no-default-features` builds the numerics alone, writing NPY and JSON.
 
+// Checks are written `!(x > 0.0)` on purpose: unlike `x <= 0.0` they also refuse NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod accuracy;
 pub mod budget;
 pub mod contact;

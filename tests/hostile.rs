@@ -467,7 +467,7 @@ fn sandbox_symlinks_never_lead_out() {
             let mut k = 0u64;
             while !stop.load(std::sync::atomic::Ordering::Relaxed) {
                 let tmp = flip.with_file_name(format!("flip.tmp{k}"));
-                let target: &Path = if k % 2 == 0 {
+                let target: &Path = if k.is_multiple_of(2) {
                     Path::new("inner")
                 } else {
                     &outside

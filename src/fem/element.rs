@@ -150,7 +150,7 @@ mod tests {
     fn constant_strain_is_exact() {
         // u = (a x + b y, c x + d y) gives eps = (a, d, b + c) exactly on any triangle.
         let x = [[0.1, 0.2], [1.3, 0.4], [0.5, 1.7]];
-        let f = |p: [f64; 2]| [2.0 * p[0] + 3.0 * p[1], -1.0 * p[0] + 0.5 * p[1]];
+        let f = |p: [f64; 2]| [2.0 * p[0] + 3.0 * p[1], -p[0] + 0.5 * p[1]];
         let u = SVector::<f64, 6>::from_iterator(x.iter().flat_map(|&p| f(p)));
         let e = strain(x, &u);
         assert!(

@@ -49,7 +49,8 @@ fn rigid_body_modes_have_zero_force() {
         .iter()
         .flatten()
         .fold(0.0f64, |m, v| m.max(v.abs()));
-    let modes: [Box<dyn Fn([f64; 2]) -> [f64; 2]>; 3] = [
+    type Mode = Box<dyn Fn([f64; 2]) -> [f64; 2]>;
+    let modes: [Mode; 3] = [
         Box::new(|_| [1.0, 0.0]),
         Box::new(|_| [0.0, 1.0]),
         Box::new(|p| [-p[1] * 1e3, p[0] * 1e3]),
