@@ -5,7 +5,7 @@
 //! plate (4 mm x 2 mm), radiates P and S waves. The loop below runs central differences until
 //! the P wave reaches a point 1.5 mm to the right (|u_x| there above 1% of its largest value
 //! in a reference run), then reports when that happened next to distance / c_p (the bump's
-//! flank reaches about 0.2 mm out, so the first motion comes ~0.08 us earlier), and the
+//! flank reaches about 0.2 mm out, so the first motion comes about 0.1 us earlier), and the
 //! energy drift of the reference run: central differences conserve 1/2 v^T M v + 1/2 u_{n-1}^T K u_n
 //! exactly without forces and damping, so the drift is round-off. The same generic loop runs
 //! on linear triangles and on spectral elements of order 4.

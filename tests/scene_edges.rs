@@ -373,10 +373,10 @@ fn sem_errors(order: usize, dt: f64) -> Vec<f64> {
 /// dt = 0.5 ns the errors measured 2e-5 to 7.8e-4 at order 2 (the T3 bound at h = 50 um is
 /// 4e-3), 1.6e-6 to 1.6e-5 at order 3, and 1.6e-6 to 2.4e-6 from order 4 on, where they stop
 /// falling with the order: that floor is the central-difference phase error, second order
-/// in dt (at order 4, dt = 1 ns gives 4e-6 to 7e-6, about 3x; the rest is ~1e-6 of the exact
+/// in dt (at order 4, dt = 1 ns gives 4.5e-6 to 7.5e-6, 2.5-3.7x; the rest is ~1e-6 of the exact
 /// solution's own sampling). Asserted: order 2 below 2e-3, order 3 at least 3x below order 2
 /// at every receiver (p-convergence), orders 4 and 5 below 5e-6, and doubling dt at order 4
-/// raising every error at least 2.2x (measured 2.5-3.6x: the floor is the time step's), with the energy ledger
+/// raising every error at least 2.2x (measured 2.5-3.7x: the floor is the time step's), with the energy ledger
 /// closing to 1e-6 in every run.
 #[test]
 fn plane_wave_through_a_layer_stack_on_spectral_elements() {

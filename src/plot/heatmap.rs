@@ -93,13 +93,7 @@ impl<'a> HeatFig<'a> {
         X::CoordDescType: ValueFormatter<f64>,
         Y::CoordDescType: ValueFormatter<f64>,
     {
-        let frame = Frame {
-            caption: "",
-            x_desc: &self.axes.x_label,
-            y_desc: &self.axes.y_label,
-            x_area: X_AREA,
-            scales: (self.axes.x_scale, self.axes.y_scale),
-        };
+        let frame = Frame::of(&self.axes);
         let mut chart = builder(area, &frame)
             .build_cartesian_2d(xr, yr)
             .map_err(draw_err)?;

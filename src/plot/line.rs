@@ -36,13 +36,7 @@ impl Figure for LineFig<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
         let a = self.axes;
         let body = titled(root, &a.title)?;
-        let frame = Frame {
-            caption: "",
-            x_desc: &a.x_label,
-            y_desc: &a.y_label,
-            x_area: X_AREA,
-            scales: (a.x_scale, a.y_scale),
-        };
+        let frame = Frame::of(a);
         let ranges = series_ranges(self.series, a.x_scale, a.y_scale);
         let scales = (a.x_scale, a.y_scale);
         draw_lines_scaled(&body, &frame, self.series, self.markers, ranges, scales)

@@ -192,6 +192,20 @@ pub(super) struct Frame<'a> {
     pub(super) scales: (Scale, Scale),
 }
 
+impl<'a> Frame<'a> {
+    /// The frame of a figure's `axes`: no caption (the title is drawn above), axis labels,
+    /// x tick labels shown, the axes' scales.
+    pub(super) fn of(axes: &'a Axes) -> Frame<'a> {
+        Frame {
+            caption: "",
+            x_desc: &axes.x_label,
+            y_desc: &axes.y_label,
+            x_area: X_AREA,
+            scales: (axes.x_scale, axes.y_scale),
+        }
+    }
+}
+
 /// A chart builder on `area` with the standard margins and label bands.
 pub(super) fn builder<'a, 'b, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
