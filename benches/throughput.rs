@@ -19,7 +19,7 @@ use trnews::fem::{element, Model, StiffnessOperator};
 use trnews::laminate::{Laminate, StochasticSpec};
 use trnews::material::{Material, Plane};
 use trnews::mesh::{Mesh, Side};
-use trnews::scene::{Scene, SceneSpec};
+use trnews::scene::{Body, Scene, SceneSpec};
 use trnews::signal::Signal;
 use trnews::solve::{
     self, segment_receiver, traction_source, Quantity, RunConfig, Source, StabilityEstimate,
@@ -502,7 +502,9 @@ fn main() {
         let spec = SceneSpec::default();
         let cracked_scene = Scene::build(&spec).expect("default scene");
         let plain_scene = Scene::build(&spec.uncracked()).expect("uncracked default scene");
-        let (cracked, plain) = (&cracked_scene.model, &plain_scene.model);
+        let (Body::T3(cracked), Body::T3(plain)) = (&cracked_scene.body, &plain_scene.body) else {
+            unreachable!("the default scene is T3")
+        };
         let dt = cracked_scene.default_dt_s();
         assert_eq!(dt, plain_scene.default_dt_s(), "the companions share dt");
         let crack = cracked
@@ -611,7 +613,7 @@ fn main() {
         let (simulated_s, _) = sweep(&tr::Responder::simulating(scene.clone()), points);
         println!(
             "\nLinear delayed TR-NEWS sweep, {points} points, smoke scene ({} DOFs):",
-            scene.model.dofs()
+            scene.dofs()
         );
         println!(
             "  impulse response + convolutions: {convolved_s:8.2} s (largest misfit {misfit:.1e})"
@@ -622,7 +624,7 @@ fn main() {
         );
         sweep_rows.push(SweepRow {
             points,
-            dofs: scene.model.dofs(),
+            dofs: scene.dofs(),
             convolved_s,
             simulated_s,
             speedup: simulated_s / convolved_s,

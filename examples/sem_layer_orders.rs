@@ -48,7 +48,7 @@ fn main() {
     let quick = Scene::build(&SceneSpec::default()).expect("quick scene");
     println!(
         "T3 quick scene: {} DOFs, dt_crit {:.3} ns",
-        quick.model.dofs(),
+        quick.dofs(),
         quick.stability.dt_crit_s * 1e9
     );
     for (hx, px, row_m) in [

@@ -172,7 +172,7 @@ fn snapshot_titled(
     component: usize,
     prefix: &str,
 ) -> Result<()> {
-    let mesh = &scene.model.mesh;
+    let mesh = scene.mesh();
     let values: Vec<f64> = snap
         .displacement
         .iter()
@@ -190,7 +190,7 @@ fn snapshot_titled(
             width: 1,
         })
         .collect();
-    if let Some(c) = &scene.model.crack {
+    if let Some(c) = scene.crack() {
         overlays.push(Overlay {
             points: vec![(c.x0_m, c.y_m), (c.x1_m, c.y_m)],
             color: (0, 0, 0),
@@ -223,12 +223,10 @@ pub fn scattered_snapshot(
     component: usize,
 ) -> Result<()> {
     let crack = cracked
-        .model
-        .crack
-        .as_ref()
+        .crack()
         .ok_or_else(|| Error::invalid("scene", "uncracked", "has no crack to scatter from"))?;
     let tied_nodes = tied.displacement.len() / 2;
-    let mut twin: Vec<usize> = (0..cracked.model.mesh.nodes.len()).collect();
+    let mut twin: Vec<usize> = (0..cracked.mesh().nodes.len()).collect();
     for p in &crack.pairs {
         twin[p.slave] = p.master;
     }

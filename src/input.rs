@@ -162,6 +162,16 @@ impl InputRoot {
             && self.dir.is_dir(p)
     }
 
+    /// True when `rel` (relative, without `..`) is a regular file beneath the root; false when
+    /// it is missing, not a file, or leads out of the root.
+    pub fn is_file(&self, rel: &str) -> bool {
+        let p = Path::new(rel);
+        !p.has_root()
+            && p.components()
+                .all(|c| matches!(c, Component::Normal(_) | Component::CurDir))
+            && self.dir.is_file(p)
+    }
+
     /// True when the longest existing prefix of `rel` resolves outside the root (wording only:
     /// cap-std has already refused the open).
     fn leads_outside(&self, rel: &Path) -> bool {

@@ -15,7 +15,7 @@
 //! For a linear scene B * (h * (B * s)) is formed from the raw impulse response h.
 
 use crate::accuracy::{Estimate, T3_ORDER};
-use crate::error::{Error, Result};
+use crate::error::{require_positive, Error, Result};
 use crate::scene::{Resolution, Scene};
 use crate::signal::{self, ChirpSpec, Peak, SideLobes, Signal};
 use crate::solve::RunReport;
@@ -191,6 +191,13 @@ impl Responder {
     /// afterwards; for a nonlinear scene, the same as [`Responder::simulating`].
     pub fn new(scene: Arc<Scene>, duration_s: f64) -> Result<Responder> {
         let dt_s = scene.default_dt_s();
+        Self::with_step(scene, duration_s, dt_s)
+    }
+
+    /// [`Responder::new`] with every run at the time step `dt_s` (at most the scene's
+    /// dt_crit) instead of the default.
+    pub fn with_step(scene: Arc<Scene>, duration_s: f64, dt_s: f64) -> Result<Responder> {
+        require_positive("dt_s", dt_s)?;
         let mut impulse = None;
         if scene.is_linear() {
             let unit = Signal {
@@ -375,7 +382,7 @@ impl Responder {
             .into_iter()
             .map(|factor| Ok(Arc::new(Scene::build(&scene.spec.coarsened(factor)?)?)))
             .collect::<Result<Vec<_>>>()?;
-        let work = |s: &Scene, dt: f64| s.model.dofs() as f64 / dt;
+        let work = |s: &Scene, dt: f64| s.dofs() as f64 / dt;
         let cost = scenes
             .iter()
             .map(|s| work(s, s.default_dt_s()))

@@ -8,7 +8,7 @@ use rustfft::FftPlanner;
 use trnews::material::{Material, Plane};
 use trnews::mesh::Side;
 use trnews::scene::{
-    Absorber, EdgeCondition, EdgeConditions, GmshSpec, LaminateSpec, LayerSpec, MaterialSpec,
+    Absorber, DiscretisationSpec, EdgeCondition, EdgeConditions, GmshSpec, LaminateSpec, LayerSpec, MaterialSpec,
     ReceiverAt, ReceiverSpec, Scene, SceneSpec, SourceSpec,
 };
 use trnews::signal::Signal;
@@ -290,79 +290,38 @@ fn plane_wave_through_a_layer_stack_matches_the_transfer_matrix_solution_at_seco
     }
 }
 
-/// The same plane wave on spectral elements through the library's loop
-/// (`solve::run_central_difference_on`): 2 elements across the strip, element rows of at most
-/// 0.15 mm aligned with the layers, order p along x and (at most) across y; roller sides
-/// (u_x = 0 on the side node columns), GLL-weighted Lysmer-Kuhlemeyer dashpots at the bottom,
-/// the uniform normal traction with GLL weights (`SemModel::side_load`), receivers
-/// interpolated at the same points. Relative L2 errors against the exact solution at a step
-/// of `dt`.
+/// The same plane wave on a spectral-element scene (`discretisation: sem`): 2 elements across
+/// the strip, element rows of at most 0.15 mm aligned with the layers, order p along x and (at
+/// most) across y; the scene's roller sides, GLL-weighted Lysmer-Kuhlemeyer dashpots at the
+/// bottom, the uniform normal traction with GLL weights and the receivers interpolated at the
+/// same points. Relative L2 errors against the exact solution at a step of `dt`.
 fn sem_errors(order: usize, dt: f64) -> Vec<f64> {
-    use trnews::sem::{SemModel, SemSpec};
-    use trnews::solve::{run_central_difference_on, Quantity, Receiver, Source};
-    let scene = Scene::build(&spec(H0, EdgeCondition::Roller)).unwrap();
-    let cut = SemSpec {
-        order_x: order,
-        max_order_y: order,
+    let spec = SceneSpec {
         element_size_x_m: WIDTH / 2.0,
         element_size_y_m: 0.15e-3,
-    };
-    let mut sem = SemModel::layered(&scene.laminate, WIDTH, &cut).unwrap();
-    let last = sem.x_nodes_m.len() - 1;
-    sem.fixed_dofs = (0..sem.y_nodes_m.len())
-        .flat_map(|j| [2 * sem.node(0, j), 2 * sem.node(last, j)])
-        .collect();
-    sem.dashpots = sem.lysmer_dashpots(&[Side::Bottom]);
-    let mut free = vec![true; sem.dofs()];
-    for &d in &sem.fixed_dofs {
-        free[d] = false;
-    }
-    let dt_crit = 2.0 / sem.max_eigenvalue(&free).0.sqrt();
-    // the traction's direction as the T3 scene applies it (top edge, u_y)
-    let sign = scene
-        .transmitter
-        .iter()
-        .find(|w| w.0 % 2 == 1)
-        .unwrap()
-        .1
-        .signum();
-    let steps = (DURATION / dt).round() as usize + 1;
-    let source = Source {
-        weights: sem
-            .side_load(Side::Top, 0.0, WIDTH)
-            .into_iter()
-            .map(|(n, w)| (2 * n + 1, sign * w))
-            .collect(),
-        signal: Signal {
-            dt_s: dt,
-            t0_s: 0.0,
-            samples: (0..steps).map(|k| ricker(k as f64 * dt, PULSE)).collect(),
+        discretisation: DiscretisationSpec::Sem {
+            order_x: order,
+            max_order_y: order,
         },
+        ..spec(H0, EdgeCondition::Roller)
     };
-    let receivers: Vec<Receiver> = POINTS
-        .iter()
-        .map(|&(x, y)| Receiver {
-            name: format!("({x}, {y})"),
-            weights: sem
-                .point_weights(x, y)
-                .unwrap()
-                .into_iter()
-                .map(|(n, w)| (2 * n + 1, w))
-                .collect(),
-            quantity: Quantity::Displacement,
-        })
-        .collect();
+    let scene = Scene::build(&spec).unwrap();
+    let steps = (DURATION / dt).round() as usize + 1;
+    let drive = Signal {
+        dt_s: dt,
+        t0_s: 0.0,
+        samples: (0..steps).map(|k| ricker(k as f64 * dt, PULSE)).collect(),
+    };
     let config = RunConfig {
         dt_s: Some(dt),
-        duration_s: DURATION,
         progress: false,
-        ..Default::default()
+        ..scene.run_config(DURATION)
     };
-    let out = run_central_difference_on(&sem, dt_crit, &[source], &receivers, &config).unwrap();
+    let out = scene.transmit(&drive, &config).unwrap();
     assert!(out.report.energy_residual_peak < 1e-6, "{:?}", out.report);
     let ys: Vec<f64> = POINTS.iter().map(|p| p.1).collect();
     let reference = exact(dt, out.traces[0].samples.len(), &ys);
-    out.traces
+    out.traces[1..]
         .iter()
         .zip(&reference)
         .map(|(t, r)| relative_error(&t.samples, r))
@@ -411,7 +370,7 @@ fn plane_wave_through_a_layer_stack_on_spectral_elements() {
 #[test]
 fn receivers_on_nodes_take_the_node_alone_and_off_nodes_the_holding_element() {
     let scene = Scene::build(&spec(H0, EdgeCondition::Roller)).unwrap();
-    let nodes = &scene.model.mesh.nodes;
+    let nodes = &scene.mesh().nodes;
     // interfaces at 0.6 and 0.9 mm and the top surface: mesh nodes, weight exactly 1
     for (r, &(x, y)) in scene.receivers[1..4].iter().zip(&POINTS[..3]) {
         assert_eq!(r.weights.len(), 1, "{}", r.name);

@@ -228,7 +228,10 @@ impl Mesh {
         )
     }
 
-    fn from_grid(grid: Grid, interfaces: &[f64], layer_material: &[usize]) -> Mesh {
+    /// The tensor grid of `grid`'s lines, node (i, j) at index `j * nx + i`, each cell split
+    /// along its rising diagonal into two T3, each row of cells taking the material of the
+    /// layer holding its middle.
+    pub(crate) fn from_grid(grid: Grid, interfaces: &[f64], layer_material: &[usize]) -> Mesh {
         let (nxn, nyn) = (grid.x_m.len(), grid.y_m.len());
         let mut nodes = Vec::with_capacity(nxn * nyn);
         for &y in &grid.y_m {

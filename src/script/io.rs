@@ -233,6 +233,15 @@ mod io_api {
 
     type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
 
+    /// True when `path` is a file beneath the data directory (--data, default the script's directory), where io::read_* would find it; false when it is missing or leads out of that directory.
+    #[rhai_fn(return_raw)]
+    pub fn exists(ctx: NativeCallContext, path: &str) -> Res<bool> {
+        let root = HostContext::of(&ctx)?
+            .data_root()
+            .map_err(|m| super::error(&ctx, m))?;
+        Ok(root.is_file(path))
+    }
+
     /// Reads a 1-D or 2-D .npy array (float64, float32, int64 or int32) beneath the data directory (--data, default the script's directory): an array of numbers, or an array of rows.
     #[rhai_fn(return_raw)]
     pub fn read_npy(ctx: NativeCallContext, path: &str) -> Res<Dynamic> {

@@ -104,6 +104,18 @@ mod scene_api {
         super::build(&ctx, overrides, base)
     }
 
+    /// Builds a preset scene (as `preset(name, overrides)`) on the discretisation `kind`: "t3" (the preset's triangles) or "sem" (spectral elements of the sizes and orders that go with the resolution; README "Spectral elements").
+    #[rhai_fn(name = "preset", return_raw)]
+    pub fn preset_on(
+        ctx: NativeCallContext,
+        name: &str,
+        kind: &str,
+        overrides: Map,
+    ) -> Res<SceneRef> {
+        let base = SceneSpec::preset_on(name.parse().at(&ctx)?, kind.parse().at(&ctx)?);
+        super::build(&ctx, overrides, base)
+    }
+
     /// The scene refined for a requested accuracy: element sizes halved until the predicted relative L2 error of the first-pass responses to the chirp of the TR-NEWS `spec` map is at most `tolerance` (pilot runs of the crack-tied scene at h, 2h, 4h; see `study::resolution_for_tolerance`); prints the chosen sizes, the predicted error and run time. `tolerance` 0 returns the scene unchanged. Check the result after the run with an error estimate.
     #[rhai_fn(return_raw)]
     pub fn for_tolerance(
@@ -146,7 +158,7 @@ mod scene_api {
     /// Degrees of freedom of the scene's model.
     #[rhai_fn(global, get = "dofs", pure)]
     pub fn dofs(scene: &mut SceneRef) -> INT {
-        scene.model.dofs() as INT
+        scene.dofs() as INT
     }
 
     /// Default time step of its runs, 0.9 dt_crit (s).
@@ -167,18 +179,15 @@ mod scene_api {
         scene.is_linear()
     }
 
-    /// Summary map: spec, DOFs, nodes, elements, layers, size, dt_crit and its element bound, clamped epoxy fraction, crack pairs, and crack: #{depth_requested_m, depth_used_m, x0_requested_m, x0_used_m, x1_requested_m, x1_used_m, tied} (where the crack snapped to the mesh lines; () without a crack).
+    /// Summary map: spec, DOFs, nodes, elements (triangles or spectral elements), layers, size, dt_crit and its element bound, clamped epoxy fraction, crack pairs, and crack: #{depth_requested_m, depth_used_m, x0_requested_m, x0_used_m, x1_requested_m, x1_used_m, tied} (where the crack snapped to the mesh lines; () without a crack).
     #[rhai_fn(global, pure, return_raw)]
     pub fn summary(ctx: NativeCallContext, scene: &mut SceneRef) -> Res<Dynamic> {
-        let (x0, x1, y0, y1) = scene.model.mesh.bounds();
+        let (x0, x1, y0, y1) = scene.mesh().bounds();
         let mut m = Map::new();
         m.insert("spec".into(), to_dynamic(&ctx, &scene.spec)?);
-        m.insert("dofs".into(), (scene.model.dofs() as INT).into());
-        m.insert("nodes".into(), (scene.model.mesh.nodes.len() as INT).into());
-        m.insert(
-            "elements".into(),
-            (scene.model.mesh.triangles.len() as INT).into(),
-        );
+        m.insert("dofs".into(), (scene.dofs() as INT).into());
+        m.insert("nodes".into(), (scene.mesh().nodes.len() as INT).into());
+        m.insert("elements".into(), (scene.elements() as INT).into());
         m.insert("layers".into(), (scene.laminate.layers.len() as INT).into());
         m.insert("width_m".into(), (x1 - x0).into());
         m.insert("height_m".into(), (y1 - y0).into());
@@ -193,7 +202,7 @@ mod scene_api {
         );
         m.insert(
             "crack_pairs".into(),
-            (scene.model.crack.as_ref().map_or(0, |c| c.pairs.len()) as INT).into(),
+            (scene.crack().map_or(0, |c| c.pairs.len()) as INT).into(),
         );
         m.insert("crack".into(), to_dynamic(&ctx, &scene.crack_placement)?);
         Ok(m.into())
@@ -350,7 +359,7 @@ fn snapshot_vtu(
         components: 2,
         values: &snap.displacement,
     };
-    crate::io::write_vtu(file, &scene.model.mesh, &[displacement], &[])
+    crate::io::write_vtu(file, &scene.mesh(), &[displacement], &[])
 }
 
 /// The VTU files of a series of `count` snapshots beside the collection `pvd`:

@@ -41,13 +41,25 @@ impl Default for EstimateChoice {
 }
 
 /// Options of `trnews::responder(scene, duration_s, options)`.
-#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ResponderOptions {
     /// Repeat every procedure on companions with 2x and 4x the element sizes and report
     /// Richardson error estimates (see `accuracy`): true, false, or "auto" (on when the
     /// companions cost at most 15% of the main runs).
     pub error_estimate: EstimateChoice,
+    /// The time step as a fraction of the scene's dt_crit, in (0, 1]: below the default 0.9
+    /// to measure or shrink the central-difference time error (O(dt^2)).
+    pub step_fraction: f64,
+}
+
+impl Default for ResponderOptions {
+    fn default() -> Self {
+        ResponderOptions {
+            error_estimate: EstimateChoice::default(),
+            step_fraction: crate::scene::STEP_FRACTION,
+        }
+    }
 }
 
 /// The companion scenes of an error estimate when `choice` asks for one: always for true,
@@ -721,7 +733,7 @@ mod trnews_api {
         Ok(tr.responses[index(&ctx, k, tr.responses.len(), "receiver")?].clone())
     }
 
-    /// A responder with options #{error_estimate}: with `error_estimate: true` (or "auto" when that costs at most 15% extra) it also builds the scene with 2x and 4x the element sizes (same laminate draw), repeats every procedure on them (about 1/8 + 1/64 of the cost where every layer coarsens) and attaches Richardson error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
+    /// A responder with options #{error_estimate, step_fraction}: `step_fraction` sets the time step to that fraction of the scene's dt_crit (default 0.9); with `error_estimate: true` (or "auto" when that costs at most 15% extra) it also builds the scene with 2x and 4x the element sizes (same laminate draw), repeats every procedure on them (about 1/8 + 1/64 of the cost where every layer coarsens) and attaches Richardson error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
     #[rhai_fn(name = "responder", return_raw)]
     pub fn responder_with(
         ctx: NativeCallContext,
@@ -731,7 +743,17 @@ mod trnews_api {
     ) -> Res<Responder> {
         let o: ResponderOptions =
             options(&ctx, settings, &ResponderOptions::default(), "responder")?;
-        let r = Responder::new(scene, duration_s).at(&ctx)?;
+        if !(o.step_fraction > 0.0 && o.step_fraction <= 1.0) {
+            return Err(super::error(
+                &ctx,
+                format!(
+                    "responder option step_fraction = {}: must be in (0, 1] (dt as a fraction of dt_crit)",
+                    o.step_fraction
+                ),
+            ));
+        }
+        let dt_s = o.step_fraction * scene.stability.dt_crit_s;
+        let r = Responder::with_step(scene, duration_s, dt_s).at(&ctx)?;
         match super::companions_wanted(&ctx, &r, &o.error_estimate)? {
             Some(scenes) => r.with_companions(scenes, duration_s).at(&ctx),
             None => Ok(r),

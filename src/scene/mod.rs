@@ -8,14 +8,17 @@ use crate::error::{require_positive, Error, Result};
 use crate::fem::{AbsorbingEdge, Model};
 use crate::laminate::{Laminate, Layer, StochasticSpec};
 use crate::material::{Orthotropic, Plane};
-use crate::mesh::{Mesh, Side};
+use crate::mesh::{Grid, Mesh, Side};
+use crate::sem::SemModel;
 use crate::signal::Signal;
 use crate::solve::{
-    self, point_receiver, segment_receiver, segment_shares, traction_source, Quantity, Receiver,
+    self, point_receiver, segment_receiver, segment_shares, Quantity, Receiver,
     RunConfig, RunOutput, StabilityEstimate,
 };
 use crate::transducer::TransducerSpec;
 use serde::{Deserialize, Serialize};
+
+mod sem;
 
 /// How the layer stack is made.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -438,6 +441,87 @@ pub struct SceneSpec {
     pub crack: Option<CrackSpec>,
     /// A mesh from a Gmsh file instead of the layered rectangle (`None`: the laminate).
     pub gmsh: Option<GmshSpec>,
+    /// How the layered rectangle is discretised: linear triangles (default) or spectral
+    /// elements, on elements of `element_size_x_m` x at most `element_size_y_m` either way.
+    pub discretisation: DiscretisationSpec,
+}
+
+/// The discretisations the experiments choose by name (`--set discretisation=t3|sem`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DiscretisationKind {
+    /// Linear triangles.
+    T3,
+    /// Spectral elements.
+    Sem,
+}
+
+impl std::str::FromStr for DiscretisationKind {
+    type Err = Error;
+
+    /// `t3` or `sem`; anything else is refused, naming the value.
+    fn from_str(name: &str) -> Result<DiscretisationKind> {
+        match name {
+            "t3" => Ok(DiscretisationKind::T3),
+            "sem" => Ok(DiscretisationKind::Sem),
+            other => Err(Error::invalid(
+                "discretisation",
+                other,
+                "expected t3 or sem",
+            )),
+        }
+    }
+}
+
+/// Spectral elements of a resolution preset: element sizes and the order (along x, and the
+/// most across y).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SemPreset {
+    /// Element width (m).
+    pub element_size_x_m: f64,
+    /// Largest element height (m).
+    pub element_size_y_m: f64,
+    /// Polynomial order.
+    pub order: usize,
+}
+
+impl SemPreset {
+    /// The spectral elements of each resolution (README "Spectral elements" gives the
+    /// accuracy and run time measured for them).
+    pub fn of(resolution: Resolution) -> SemPreset {
+        let (size, order) = match resolution {
+            Resolution::Smoke | Resolution::Quick => (0.25e-3, 4),
+            Resolution::Paper => (0.125e-3, 4),
+        };
+        SemPreset {
+            element_size_x_m: size,
+            element_size_y_m: size,
+            order,
+        }
+    }
+}
+
+/// The discretisation of a scene's layered rectangle. Both cut it along the same lines: columns
+/// of at most `element_size_x_m`, rows of at most `element_size_y_m` with every layer
+/// interface a row line. A spectral element spans `order` GLL intervals, so it wants about
+/// `order` times the element size of a T3 mesh of the same accuracy; see README "Spectral
+/// elements".
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind", deny_unknown_fields)]
+pub enum DiscretisationSpec {
+    /// Linear triangles with lumped mass, each cell split along its rising diagonal (the
+    /// report's method; a Gmsh mesh is always this).
+    #[default]
+    T3,
+    /// Spectral elements ([`crate::sem`]): GLL points of `order_x` along x in every element,
+    /// and across each element row the highest order up to `max_order_y` whose smallest GLL
+    /// gap is no smaller than the smallest gap along x (thin layers take a low order, so they
+    /// do not set the time step; [`crate::sem::SemSpec`]).
+    Sem {
+        /// Polynomial order along x.
+        order_x: usize,
+        /// Highest polynomial order across an element row.
+        max_order_y: usize,
+    },
 }
 
 impl Default for SceneSpec {
@@ -460,6 +544,7 @@ impl Default for SceneSpec {
             receivers: ReceiverSpec::default(),
             crack: Some(CrackSpec::default()),
             gmsh: None,
+            discretisation: DiscretisationSpec::T3,
         }
     }
 }
@@ -515,6 +600,28 @@ impl SceneSpec {
         }
     }
 
+    /// The scene of a resolution preset on the discretisation `kind`: the preset itself for
+    /// T3; for spectral elements the same scene with the element sizes and orders of
+    /// [`SemPreset::of`].
+    pub fn preset_on(resolution: Resolution, kind: DiscretisationKind) -> SceneSpec {
+        let t3 = SceneSpec::preset(resolution);
+        match kind {
+            DiscretisationKind::T3 => t3,
+            DiscretisationKind::Sem => {
+                let p = SemPreset::of(resolution);
+                SceneSpec {
+                    element_size_x_m: p.element_size_x_m,
+                    element_size_y_m: p.element_size_y_m,
+                    discretisation: DiscretisationSpec::Sem {
+                        order_x: p.order,
+                        max_order_y: p.order,
+                    },
+                    ..t3
+                }
+            }
+        }
+    }
+
     /// The same scene (same laminate draw) with element sizes multiplied by `factor`: the
     /// companions of an error estimate ([`crate::accuracy`]). A Gmsh scene has no element
     /// sizes to change (its mesh is the file's): an error.
@@ -554,6 +661,26 @@ impl SceneSpec {
     }
 }
 
+/// The default time step of a scene's runs as a fraction of its dt_crit (the Lanczos estimate
+/// is at or slightly above the true limit; 10% margin).
+pub const STEP_FRACTION: f64 = 0.9;
+
+/// The discrete model of a scene.
+#[derive(Clone, Debug)]
+pub enum Body {
+    /// Linear triangles (the report's method).
+    T3(Model),
+    /// Spectral elements, with the T3 triangulation of their node grid (the same node
+    /// numbering, crack duplicates included) on which nodes are selected, fields are plotted
+    /// and written as VTU (each GLL cell as two triangles).
+    Sem {
+        /// The spectral elements.
+        model: SemModel,
+        /// Their node grid as triangles.
+        nodes: Mesh,
+    },
+}
+
 /// A built scene: the model, the transmitter's nodal weights, the receivers.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -562,7 +689,7 @@ pub struct Scene {
     /// The layer stack.
     pub laminate: Laminate,
     /// The discrete model.
-    pub model: Model,
+    pub body: Body,
     /// Transmitter nodal weights per unit traction.
     pub transmitter: Vec<(usize, f64)>,
     /// Receivers 1..n.
@@ -626,7 +753,7 @@ fn layered_mesh(spec: &SceneSpec) -> Result<Built> {
     require_positive("width_m", spec.width_m)?;
     let laminate = build_laminate(&spec.laminate, spec.plane)?;
     let height = laminate.thickness_m();
-    check_mesh_size(spec, &laminate)?;
+    check_mesh_size(spec, &laminate, (1, 1))?;
     let mesh = Mesh::layered(
         &laminate,
         spec.width_m,
@@ -638,7 +765,10 @@ fn layered_mesh(spec: &SceneSpec) -> Result<Built> {
     let crack_placement = spec
         .crack
         .as_ref()
-        .map(|c| place_crack(spec, c, &mesh, height))
+        .map(|c| {
+            let grid = mesh.grid.as_ref().expect("a layered mesh is a grid");
+            place_crack(spec, c, grid, height)
+        })
         .transpose()?;
     let region = Region {
         x0: 0.0,
@@ -762,21 +892,6 @@ impl Scene {
     /// omega_max(tied) <= omega_max(split), and contact by exact multipliers only constrains
     /// the split model further (report Sec. 4.8.2, 4.9).
     pub fn build(spec: &SceneSpec) -> Result<Scene> {
-        let (laminate, mut mesh, crack_placement, region) = match &spec.gmsh {
-            None => layered_mesh(spec)?,
-            Some(g) => gmsh_mesh(spec, g)?,
-        };
-        let crack = match &crack_placement {
-            Some(p) if !p.tied => Some(p.insert(&mut mesh)?),
-            _ => None,
-        };
-        let conditions = edge_conditions(spec)?;
-        let mut fixed = if spec.fix_bottom_corners {
-            bottom_corner_dofs(&mesh)
-        } else {
-            vec![]
-        };
-        fixed.extend(held_dofs(&mesh, &conditions));
         if !(spec.transmitter.peak_pa.is_finite() && spec.transmitter.peak_pa > 0.0) {
             return Err(Error::invalid(
                 "transmitter.peak_pa",
@@ -784,47 +899,62 @@ impl Scene {
                 "must be finite and > 0 (the focusing signals are scaled to it)",
             ));
         }
-        let transmitter = if spec.sources.is_empty() {
-            transmitter_weights(&mesh, &spec.transmitter, region)?
-        } else {
-            source_weights(&mesh, &spec.sources)?
-        };
-        let receivers = build_receivers(&mesh, &spec.receivers, region.y0 + region.height)?;
-        let absorbing = absorbing_edges(spec, &conditions, &mesh, region)?;
-        let mut model = Model::build(mesh, laminate.materials.clone(), &absorbing, fixed, crack)?;
-        // The stability estimate below is the untied model's: tying restricts it to the
-        // subspace u_l = u_r, which by the Rayleigh-quotient principle can only lower
-        // omega_max (as for the crack's tied companion), so the step stays stable.
-        if is_periodic(&conditions) {
-            model.tie_periodic()?;
-        }
-        let stability = match crack_placement.as_ref().filter(|p| p.tied) {
-            Some(p) => split_stability(&model, p, &absorbing)?,
-            None => solve::stability::estimate(&model),
+        let scene = match spec.discretisation {
+            DiscretisationSpec::T3 => build_t3(spec)?,
+            DiscretisationSpec::Sem {
+                order_x,
+                max_order_y,
+            } => sem::build(spec, order_x, max_order_y)?,
         };
         crate::budget::check()?;
-        if !(stability.dt_crit_s.is_finite() && stability.dt_crit_s > 0.0) {
+        let dt_crit = scene.stability.dt_crit_s;
+        if !(dt_crit.is_finite() && dt_crit > 0.0) {
             return Err(Error::invalid(
                 "laminate (materials)",
-                format!("dt_crit = {} s", stability.dt_crit_s),
+                format!("dt_crit = {dt_crit} s"),
                 "the critical time step is not a finite positive number: a density or \
                  modulus is too small or too large for double precision",
             ));
         }
-        Ok(Scene {
-            spec: spec.clone(),
-            laminate,
-            model,
-            transmitter,
-            receivers,
-            crack_placement,
-            stability,
-        })
+        Ok(scene)
+    }
+
+    /// The T3 triangulation the scene's nodes live on: the T3 mesh, or the spectral elements'
+    /// node grid (same node numbering).
+    pub fn mesh(&self) -> &Mesh {
+        match &self.body {
+            Body::T3(model) => &model.mesh,
+            Body::Sem { nodes, .. } => nodes,
+        }
+    }
+
+    /// Degrees of freedom of the model.
+    pub fn dofs(&self) -> usize {
+        match &self.body {
+            Body::T3(model) => model.dofs(),
+            Body::Sem { model, .. } => model.dofs(),
+        }
+    }
+
+    /// Number of elements: triangles, or spectral elements.
+    pub fn elements(&self) -> usize {
+        match &self.body {
+            Body::T3(model) => model.mesh.triangles.len(),
+            Body::Sem { model, .. } => (model.columns_m.len() - 1) * (model.rows_m.len() - 1),
+        }
+    }
+
+    /// The crack's node pairs (None without a crack or with tied faces).
+    pub fn crack(&self) -> Option<&crate::mesh::Crack> {
+        match &self.body {
+            Body::T3(model) => model.crack.as_ref(),
+            Body::Sem { model, .. } => model.crack(),
+        }
     }
 
     /// True when the scene is linear time-invariant: no crack, or a crack without contact.
     pub fn is_linear(&self) -> bool {
-        self.model.crack.is_none() || self.contact().is_none()
+        self.crack().is_none() || self.contact().is_none()
     }
 
     /// The contact options of the scene's crack, as its spec gives them (None: no crack, an
@@ -888,11 +1018,21 @@ impl Scene {
             weights: self.transmitter.clone(),
             signal: traction.clone(),
         };
+        let stability = config.stability.unwrap_or(self.stability);
         let config = RunConfig {
-            stability: config.stability.or(Some(self.stability)),
+            stability: Some(stability),
             ..config.clone()
         };
-        let out = solve::run(&self.model, &[source], &self.receivers, &config)?;
+        let out = match &self.body {
+            Body::T3(model) => solve::run(model, &[source], &self.receivers, &config)?,
+            Body::Sem { model, .. } => sem::run(
+                model,
+                &[source],
+                &self.receivers,
+                &config,
+                stability.dt_crit_s,
+            )?,
+        };
         let drive_max = traction.max_abs();
         if drive_max > 0.0
             && out.report.source_work_j == 0.0
@@ -911,20 +1051,78 @@ impl Scene {
         Ok(out)
     }
 
-    /// The time step runs of this scene use by default (0.9 dt_crit).
+    /// The time step runs of this scene use by default ([`STEP_FRACTION`] dt_crit).
     pub fn default_dt_s(&self) -> f64 {
-        0.9 * self.stability.dt_crit_s
+        STEP_FRACTION * self.stability.dt_crit_s
     }
+}
+
+/// The T3 scene (see [`Scene::build`]).
+fn build_t3(spec: &SceneSpec) -> Result<Scene> {
+    let (laminate, mut mesh, crack_placement, region) = match &spec.gmsh {
+        None => layered_mesh(spec)?,
+        Some(g) => gmsh_mesh(spec, g)?,
+    };
+    let crack = match &crack_placement {
+        Some(p) if !p.tied => Some(p.insert(&mut mesh)?),
+        _ => None,
+    };
+    let conditions = edge_conditions(spec)?;
+    let fixed = held_and_pinned_dofs(spec, &mesh, &conditions);
+    let on = OnT3(&mesh);
+    let transmitter = if spec.sources.is_empty() {
+        transmitter_weights(&on, &spec.transmitter, region)?
+    } else {
+        source_weights(&on, &spec.sources)?
+    };
+    let receivers = build_receivers(&on, &spec.receivers, region.y0 + region.height)?;
+    let absorbing = absorbing_edges(spec, &conditions, &mesh, region)?;
+    let mut model = Model::build(mesh, laminate.materials.clone(), &absorbing, fixed, crack)?;
+    // The stability estimate below is the untied model's: tying restricts it to the
+    // subspace u_l = u_r, which by the Rayleigh-quotient principle can only lower
+    // omega_max (as for the crack's tied companion), so the step stays stable.
+    if is_periodic(&conditions) {
+        model.tie_periodic()?;
+    }
+    let stability = match crack_placement.as_ref().filter(|p| p.tied) {
+        Some(p) => split_stability(&model, p, &absorbing)?,
+        None => solve::stability::estimate(&model),
+    };
+    Ok(Scene {
+        spec: spec.clone(),
+        laminate,
+        body: Body::T3(model),
+        transmitter,
+        receivers,
+        crack_placement,
+        stability,
+    })
+}
+
+/// The DOFs held by the edge conditions, and the bottom corners' when `fix_bottom_corners`.
+fn held_and_pinned_dofs(
+    spec: &SceneSpec,
+    mesh: &Mesh,
+    conditions: &[(Side, EdgeCondition); 4],
+) -> Vec<usize> {
+    let mut fixed = if spec.fix_bottom_corners {
+        bottom_corner_dofs(mesh)
+    } else {
+        vec![]
+    };
+    fixed.extend(held_dofs(mesh, conditions));
+    fixed
 }
 
 /// Bytes per mesh node of a built scene and its runs (mesh, block-CSR stiffness, mass,
 /// operator stencils, solver vectors), a generous upper figure from the default scenes.
 const BYTES_PER_NODE: f64 = 1024.0;
 
-/// Refuses, before anything is allocated, a mesh that is degenerate (fewer than two columns,
+/// Refuses, before anything is allocated, a mesh (of `orders` GLL intervals per element along
+/// x and across, (1, 1) for T3) that is degenerate (fewer than two columns,
 /// layers that vanish in floating point) or whose estimated memory exceeds the limit
 /// ([`crate::budget::check_memory`]); the error names the fields the user wrote.
-fn check_mesh_size(spec: &SceneSpec, laminate: &Laminate) -> Result<()> {
+fn check_mesh_size(spec: &SceneSpec, laminate: &Laminate, orders: (usize, usize)) -> Result<()> {
     require_positive("element_size_x_m", spec.element_size_x_m)?;
     require_positive("element_size_y_m", spec.element_size_y_m)?;
     if spec.element_size_x_m > 0.5 * spec.width_m {
@@ -961,7 +1159,7 @@ fn check_mesh_size(spec: &SceneSpec, laminate: &Laminate) -> Result<()> {
         .windows(2)
         .map(|w| ((w[1] - w[0]) / spec.element_size_y_m).ceil().max(1.0))
         .sum();
-    let nodes = (columns + 1.0) * (rows + 1.0);
+    let nodes = (columns * orders.0 as f64 + 1.0) * (rows * orders.1 as f64 + 1.0);
     crate::budget::check_memory(
         "element_size_x_m, element_size_y_m",
         format!(
@@ -1007,21 +1205,17 @@ impl CrackPlacement {
     }
 }
 
-/// Snaps the crack of `c` onto the mesh lines of `mesh` (built without it): the line to the
-/// nearest interior row line, each tip to the nearest interior column line, each within half
+/// Snaps the crack of `c` onto the lines of `grid` (of the mesh built without it): the line
+/// to the nearest interior row line, each tip to the nearest interior column line, each within half
 /// the local row height / column width. Errors name the field and the value when no line is
 /// that close (the crack would lie on an edge) or when the tips leave no node between them.
 fn place_crack(
     spec: &SceneSpec,
     c: &CrackSpec,
-    mesh: &Mesh,
+    grid: &Grid,
     height: f64,
 ) -> Result<CrackPlacement> {
     let (y, x0, x1) = crack_geometry(spec, c, height)?;
-    let grid = mesh
-        .grid
-        .as_ref()
-        .ok_or_else(|| Error::Mesh("a crack needs a structured mesh".into()))?;
     let row = grid.snap_row(y).ok_or_else(|| {
         Error::invalid(
             "crack.depth_m",
@@ -1314,8 +1508,10 @@ fn bottom_corner_dofs(mesh: &Mesh) -> Vec<usize> {
         .collect()
 }
 
+/// Nodal weights of the transmitter per unit traction: the consistent load of a uniform
+/// traction in direction `angle_deg` on its segment of the right edge.
 fn transmitter_weights(
-    mesh: &Mesh,
+    on: &dyn Attach,
     t: &TransmitterSpec,
     region: Region,
 ) -> Result<Vec<(usize, f64)>> {
@@ -1327,20 +1523,99 @@ fn transmitter_weights(
             format!("needs 0 <= depth_top < depth_bottom <= {height:.4e} m"),
         ));
     }
-    let unit = Signal {
-        dt_s: 1.0,
-        t0_s: 0.0,
-        samples: vec![1.0],
-    };
     let (right, top) = (region.x0 + region.width, region.y0 + height);
-    Ok(traction_source(
-        mesh,
+    let load = on.edge_load(
+        Side::Right,
         [right, top - t.depth_top_m],
         [right, top - t.depth_bottom_m],
-        t.angle_deg,
-        unit,
-    )?
-    .weights)
+        "transmitter",
+    )?;
+    let (s, c) = t.angle_deg.to_radians().sin_cos();
+    Ok(directed(&load, [c, s], 1.0))
+}
+
+/// DOF weights of a traction `scale` * `direction` from per-node weights of a unit one.
+fn directed(load: &[(usize, f64)], direction: [f64; 2], scale: f64) -> Vec<(usize, f64)> {
+    load.iter()
+        .flat_map(|&(n, w)| {
+            [
+                (2 * n, scale * direction[0] * w),
+                (2 * n + 1, scale * direction[1] * w),
+            ]
+        })
+        .collect()
+}
+
+/// Where a scene's loads and records attach to its discretisation: the consistent nodal loads
+/// of tractions and the weights of receivers. Nodes are numbered as in [`Attach::mesh`].
+trait Attach {
+    /// The T3 mesh, or the triangulated node grid of spectral elements: bounds, nodes, sides.
+    fn mesh(&self) -> &Mesh;
+    /// Per-node weights of a unit uniform traction on the segment p..q of `side`: the
+    /// integral of each node's shape function along it (m). `field` names the segment.
+    fn edge_load(&self, side: Side, p: [f64; 2], q: [f64; 2], field: &str)
+        -> Result<Vec<(usize, f64)>>;
+    /// A receiver averaging (component, quantity) `recorded` over the face `ends` = (p, q) on
+    /// `side`, or at the point p when q == p.
+    fn face_receiver(
+        &self,
+        name: &str,
+        side: Side,
+        ends: ([f64; 2], [f64; 2]),
+        recorded: (usize, Quantity),
+    ) -> Result<Receiver>;
+    /// A receiver of (component, quantity) `recorded` at the point p in the body,
+    /// interpolated.
+    fn point_receiver(&self, name: &str, p: [f64; 2], recorded: (usize, Quantity))
+        -> Result<Receiver>;
+}
+
+/// Linear triangles: loads by length shares ([`segment_shares`]), face receivers averaged
+/// with the same shares (the nearest node for a point face), point receivers by barycentric
+/// interpolation.
+struct OnT3<'a>(&'a Mesh);
+
+impl Attach for OnT3<'_> {
+    fn mesh(&self) -> &Mesh {
+        self.0
+    }
+
+    fn edge_load(
+        &self,
+        side: Side,
+        p: [f64; 2],
+        q: [f64; 2],
+        field: &str,
+    ) -> Result<Vec<(usize, f64)>> {
+        let nodes = self.0.nodes_on_segment(p, q);
+        if nodes.len() < 2 {
+            return Err(Error::invalid(
+                field,
+                format!("{p:?}..{q:?} m on the {} edge", side.name()),
+                "covers fewer than two mesh nodes: widen the range",
+            ));
+        }
+        Ok(segment_shares(self.0, &nodes))
+    }
+
+    fn face_receiver(
+        &self,
+        name: &str,
+        _: Side,
+        (p, q): ([f64; 2], [f64; 2]),
+        (component, quantity): (usize, Quantity),
+    ) -> Result<Receiver> {
+        segment_receiver(self.0, name, p, q, component, quantity)
+    }
+
+    fn point_receiver(
+        &self,
+        name: &str,
+        p: [f64; 2],
+        (component, quantity): (usize, Quantity),
+    ) -> Result<Receiver> {
+        point_receiver(self.0, name, p, component, quantity)
+    }
 }
 
 /// The end points of an edge source's range on the mesh: `x_m` along the top or bottom
@@ -1404,8 +1679,10 @@ fn outward_normal(side: Side) -> [f64; 2] {
 }
 
 /// Nodal weights of all `sources` per unit drive (Pa): the consistent nodal loads of their
-/// tractions ([`segment_shares`] times the traction direction) and their point forces.
-fn source_weights(mesh: &Mesh, sources: &[SourceSpec]) -> Result<Vec<(usize, f64)>> {
+/// tractions ([`Attach::edge_load`] times the traction direction) and their point forces
+/// (on the node nearest to the point).
+fn source_weights(on: &dyn Attach, sources: &[SourceSpec]) -> Result<Vec<(usize, f64)>> {
+    let mesh = on.mesh();
     let mut weights = Vec::new();
     for (i, source) in sources.iter().enumerate() {
         let field = format!("sources[{i}]");
@@ -1451,20 +1728,8 @@ fn source_weights(mesh: &Mesh, sources: &[SourceSpec]) -> Result<Vec<(usize, f64
         };
         check_scale(&field, scale)?;
         let (p, q) = edge_range(mesh, edge, x_m, depth_m, &field)?;
-        let nodes = mesh.nodes_on_segment(p, q);
-        if nodes.len() < 2 {
-            return Err(Error::invalid(
-                field,
-                format!("{p:?}..{q:?} m on the {} edge", edge.name()),
-                "covers fewer than two mesh nodes: widen the range",
-            ));
-        }
-        for (n, l) in segment_shares(mesh, &nodes) {
-            weights.extend([
-                (2 * n, scale * direction[0] * l),
-                (2 * n + 1, scale * direction[1] * l),
-            ]);
-        }
+        let load = on.edge_load(edge, p, q, &field)?;
+        weights.extend(directed(&load, direction, scale));
     }
     Ok(weights)
 }
@@ -1494,7 +1759,8 @@ fn check_inside(mesh: &Mesh, field: &str, p: [f64; 2]) -> Result<()> {
 }
 
 /// The receivers: the top-surface row of `x_m`, then those of `at`.
-fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Receiver>> {
+fn build_receivers(on: &dyn Attach, r: &ReceiverSpec, height: f64) -> Result<Vec<Receiver>> {
+    let mesh = on.mesh();
     if r.component > 1 {
         return Err(Error::invalid(
             "receivers.component",
@@ -1510,21 +1776,26 @@ fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Rec
         ));
     }
     let half = 0.5 * r.aperture_m;
-    let face = |name: &str, p: [f64; 2], along: [f64; 2]| {
-        segment_receiver(
-            mesh,
-            name,
+    let recorded = (r.component, r.quantity);
+    let face = |name: &str, side: Side, p: [f64; 2], along: [f64; 2]| {
+        let ends = (
             [p[0] - half * along[0], p[1] - half * along[1]],
             [p[0] + half * along[0], p[1] + half * along[1]],
-            r.component,
-            r.quantity,
-        )
+        );
+        on.face_receiver(name, side, ends, recorded)
     };
     let mut receivers = r
         .x_m
         .iter()
         .enumerate()
-        .map(|(i, &x)| face(&format!("receiver {}", i + 1), [x, height], [1.0, 0.0]))
+        .map(|(i, &x)| {
+            face(
+                &format!("receiver {}", i + 1),
+                Side::Top,
+                [x, height],
+                [1.0, 0.0],
+            )
+        })
         .collect::<Result<Vec<_>>>()?;
     let (x0, x1, y0, y1) = mesh.bounds();
     for (i, at) in r.at.iter().enumerate() {
@@ -1533,7 +1804,7 @@ fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Rec
         let receiver = match (at.edge, at.x_m, at.y_m, at.depth_m) {
             (None, Some(x), Some(y), None) => {
                 check_inside(mesh, &field, [x, y])?;
-                point_receiver(mesh, &name, [x, y], r.component, r.quantity)?
+                on.point_receiver(&name, [x, y], recorded)?
             }
             (Some(edge), x_m, None, depth_m) => {
                 let horizontal = matches!(edge, Side::Top | Side::Bottom);
@@ -1557,7 +1828,7 @@ fn build_receivers(mesh: &Mesh, r: &ReceiverSpec, height: f64) -> Result<Vec<Rec
                         ))
                     }
                 };
-                face(&name, p, along)?
+                face(&name, edge, p, along)?
             }
             _ => {
                 return Err(Error::invalid(

@@ -1,0 +1,239 @@
+//! Spectral-element scenes (`discretisation: #{kind: "sem", ...}`): what they build, the
+//! energy ledger on a closed and an open scene, the crack's contact acting from its first
+//! contact and not before, the impulse-response shortcut, and refused inputs. The wave
+//! physics of SEM scenes against exact solutions is in tests/scene_edges.rs (the plane wave
+//! through a layer stack) and tests/waves.rs; the contact laws on split GLL nodes in
+//! tests/sem_contact.rs.
+
+use std::sync::Arc;
+use trnews::scene::{
+    Body, DiscretisationSpec, EdgeCondition, EdgeConditions, GmshSpec, Scene, SceneSpec,
+};
+use trnews::signal::{relative_l2, Signal};
+use trnews::solve::RunConfig;
+use trnews::trnews::{Responder, TrNewsSpec};
+
+fn sem(order: usize) -> DiscretisationSpec {
+    DiscretisationSpec::Sem {
+        order_x: order,
+        max_order_y: order,
+    }
+}
+
+/// The smoke scene (cracked, viscous-spring edges, transducer band) on order-4 spectral
+/// elements of 0.25 mm.
+fn smoke_sem() -> SceneSpec {
+    SceneSpec {
+        element_size_x_m: 0.25e-3,
+        element_size_y_m: 0.25e-3,
+        discretisation: sem(4),
+        ..SceneSpec::smoke()
+    }
+}
+
+/// The smoke chirp at the scene's step and peak traction.
+fn chirp(scene: &Scene) -> Signal {
+    TrNewsSpec::smoke()
+        .chirp
+        .signal(scene.default_dt_s(), scene.spec.transmitter.peak_pa)
+        .unwrap()
+}
+
+fn run(scene: &Scene, drive: &Signal, duration: f64) -> trnews::solve::RunOutput {
+    let config = RunConfig {
+        progress: false,
+        ..scene.run_config(duration)
+    };
+    scene.transmit(drive, &config).unwrap()
+}
+
+#[test]
+fn a_sem_scene_builds_its_nodes_crack_loads_and_receivers() {
+    let spec = smoke_sem();
+    let cracked = Scene::build(&spec).unwrap();
+    let tied = Scene::build(&spec.uncracked()).unwrap();
+    let Body::Sem { model, nodes } = &cracked.body else {
+        panic!("a T3 body for discretisation sem");
+    };
+    let crack = cracked.crack().expect("the smoke scene is cracked");
+    assert!(tied.crack().is_none() && tied.is_linear() && !cracked.is_linear());
+    // The crack's faces are split GLL nodes: one more node per pair, numbered alike in the
+    // model and its node grid; the companions share the step (the split model's).
+    assert_eq!(cracked.dofs(), tied.dofs() + 2 * crack.pairs.len());
+    assert_eq!(2 * nodes.nodes.len(), cracked.dofs());
+    assert_eq!(2 * tied.mesh().nodes.len(), tied.dofs());
+    assert_eq!(cracked.default_dt_s(), tied.default_dt_s());
+    // It lies on a horizontal element edge, its tips on node columns.
+    let p = cracked.crack_placement.as_ref().unwrap();
+    let height = cracked.laminate.thickness_m();
+    let line = height - p.depth_used_m;
+    assert!(model.rows_m.iter().any(|&y| (y - line).abs() < 1e-12), "{p:?}");
+    for x in [p.x0_used_m, p.x1_used_m] {
+        assert!(model.x_nodes_m.contains(&x), "tip {x}");
+    }
+    // The transmitter's load is the consistent load of the traction on its segment: the x
+    // and y weights sum to (cos, sin)(110 deg) times its length (1 mm) to round-off.
+    let t = &spec.transmitter;
+    let length = t.depth_bottom_m - t.depth_top_m;
+    let (s, c) = t.angle_deg.to_radians().sin_cos();
+    for (component, expected) in [(0, c * length), (1, s * length)] {
+        let sum: f64 = cracked
+            .transmitter
+            .iter()
+            .filter(|w| w.0 % 2 == component)
+            .map(|w| w.1)
+            .sum();
+        assert!(
+            (sum - expected).abs() < 1e-12 * length,
+            "component {component}: {sum:e} vs {expected:e}"
+        );
+    }
+    // Receivers interpolate u_y with the GLL polynomials: weights sum to one.
+    for r in &cracked.receivers {
+        let sum: f64 = r.weights.iter().map(|w| w.1).sum();
+        assert!((sum - 1.0).abs() < 1e-12, "{}: {sum}", r.name);
+        assert!(r.weights.iter().all(|w| w.0 % 2 == 1), "{}", r.name);
+    }
+    // The Lanczos step is above the guaranteed element bound.
+    let st = cracked.stability;
+    assert!(
+        st.dt_crit_s >= st.dt_element_bound_s && st.dt_element_bound_s > 0.0,
+        "{st:?}"
+    );
+}
+
+/// Energy ledger of SEM scenes under the smoke chirp: on a closed box (free edges, no
+/// transducer) with the contacting, frictional crack, the residual is round-off (bound 1e-6,
+/// as for T3 scenes); on the open smoke scene (viscous-spring edges) below 1e-3 of the input.
+#[test]
+fn the_energy_ledger_closes_on_closed_and_open_sem_scenes() {
+    let closed = SceneSpec {
+        absorbing: vec![],
+        edges: EdgeConditions {
+            bottom: Some(EdgeCondition::Free),
+            top: Some(EdgeCondition::Free),
+            left: Some(EdgeCondition::Free),
+            right: Some(EdgeCondition::Free),
+        },
+        transducer: None,
+        ..smoke_sem()
+    };
+    for (spec, bound) in [(closed, 1e-6), (smoke_sem(), 1e-3)] {
+        let scene = Scene::build(&spec).unwrap();
+        let out = run(&scene, &chirp(&scene), 20e-6);
+        let contact = out.report.contact.as_ref().expect("contact");
+        eprintln!(
+            "energy residual {:.2e} (bound {bound:e}), {} steps in contact, penetration {:.1e} m",
+            out.report.energy_residual_peak, contact.steps_in_contact, contact.max_penetration_m
+        );
+        assert!(contact.steps_in_contact > 0, "the crack must close");
+        assert!(
+            out.report.energy_residual_peak < bound,
+            "{:?}",
+            out.report
+        );
+    }
+}
+
+/// The contact law changes nothing before the faces first touch: the cracked SEM scene with
+/// contact and the same scene with an open crack (`contact: ()`) record the same traces bit
+/// for bit up to the step of the first contact, and differ after it.
+#[test]
+fn contact_on_a_sem_crack_acts_from_the_first_contact_and_not_before() {
+    let spec = smoke_sem();
+    let mut open = spec.clone();
+    open.crack.as_mut().unwrap().contact = None;
+    let (contacting, open) = (
+        Scene::build(&spec).unwrap(),
+        Scene::build(&open).unwrap(),
+    );
+    assert!(open.is_linear() && open.crack().is_some());
+    let drive = chirp(&contacting);
+    let a = run(&contacting, &drive, 20e-6);
+    let b = run(&open, &drive, 20e-6);
+    let series = a.contact_series.expect("contact series");
+    let first = series
+        .in_contact
+        .samples
+        .iter()
+        .position(|&n| n > 0.0)
+        .expect("the crack closes");
+    eprintln!("first contact at step {first} of {}", a.traces[0].len());
+    for (x, y) in a.traces.iter().zip(&b.traces) {
+        assert_eq!(x.samples[..=first], y.samples[..=first]);
+    }
+    let differ = a
+        .traces
+        .iter()
+        .zip(&b.traces)
+        .any(|(x, y)| relative_l2(x, y, None).unwrap() > 1e-6);
+    assert!(differ, "contact changed no trace");
+    assert!(b.contact_series.is_none() && b.report.contact.is_none());
+}
+
+/// A linear SEM scene takes the impulse-response shortcut: convolving with its impulse
+/// response equals simulating the chirp to round-off (1e-10 relative, as for T3 scenes).
+#[test]
+fn a_linear_sem_scene_convolves_its_impulse_response() {
+    let scene = Arc::new(Scene::build(&smoke_sem().uncracked()).unwrap());
+    let convolving = Responder::new(scene.clone(), 20e-6).unwrap();
+    let simulating = Responder::simulating(scene.clone());
+    let drive = chirp(&scene);
+    let a = convolving.respond(&drive, 15e-6).unwrap();
+    let b = simulating.respond(&drive, 15e-6).unwrap();
+    let err = a
+        .traces
+        .iter()
+        .zip(&b.traces)
+        .map(|(x, y)| relative_l2(x, y, None).unwrap())
+        .fold(0.0, f64::max);
+    eprintln!("SEM impulse-response convolution vs simulation: relative L2 {err:e}");
+    assert!(err < 1e-10, "{err:e}");
+    assert!(a.report.is_none() && b.report.is_some());
+}
+
+fn error_of(spec: &SceneSpec) -> String {
+    Scene::build(spec).unwrap_err().to_string()
+}
+
+#[test]
+fn bad_sem_scenes_are_errors_naming_the_field() {
+    for (order_x, max_order_y, field) in [
+        (0, 4, "discretisation.order_x"),
+        (4, 17, "discretisation.max_order_y"),
+    ] {
+        let spec = SceneSpec {
+            discretisation: DiscretisationSpec::Sem {
+                order_x,
+                max_order_y,
+            },
+            ..smoke_sem()
+        };
+        let e = error_of(&spec);
+        assert!(e.contains(field), "{e}");
+    }
+    let periodic = SceneSpec {
+        edges: EdgeConditions {
+            left: Some(EdgeCondition::Periodic),
+            right: Some(EdgeCondition::Periodic),
+            ..Default::default()
+        },
+        crack: None,
+        ..smoke_sem()
+    };
+    assert!(error_of(&periodic).contains("edges"));
+    let gmsh = SceneSpec {
+        gmsh: Some(GmshSpec {
+            path: "plate.msh".into(),
+            materials: Default::default(),
+            crack_line: None,
+            contact: None,
+            tied: false,
+            bytes: None,
+        }),
+        crack: None,
+        ..smoke_sem()
+    };
+    let e = error_of(&gmsh);
+    assert!(e.contains("discretisation.kind") && e.contains("t3"), "{e}");
+}
