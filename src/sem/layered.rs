@@ -99,22 +99,21 @@ impl SemModel {
     /// (x along the bottom and top, y along the left and right): per node, the integral of its
     /// Lagrange polynomial over the part, f_k = int l_k(s) ds. Each element's share is
     /// integrated by GLL quadrature of one order more than the element's on the overlap, exact
-    /// for the polynomial l_k; a part covering whole elements gets the GLL edge weights.
+    /// for the polynomial l_k; a part covering whole elements gets the GLL edge weights. On a
+    /// side a through-crack ends on, each face's node takes its own row's share.
     pub fn side_load(&self, side: Side, from_m: f64, to_m: f64) -> Vec<(usize, f64)> {
         let mut load = std::collections::BTreeMap::<usize, f64>::new();
-        let (lines, rules, last): (&[f64], Vec<&Gll>, usize) = match side {
-            Side::Bottom | Side::Top => (
-                &self.columns_m,
-                vec![&self.gll_x; self.columns_m.len() - 1],
-                self.y_nodes_m.len() - 1,
-            ),
-            Side::Left | Side::Right => (&self.rows_m, self.gll_y.iter().collect(), self.nx() - 1),
+        let (rows, columns) = (self.gll_y.len(), self.columns_m.len() - 1);
+        let (lines, rules): (&[f64], Vec<&Gll>) = match side {
+            Side::Bottom | Side::Top => (&self.columns_m, vec![&self.gll_x; columns]),
+            Side::Left | Side::Right => (&self.rows_m, self.gll_y.iter().collect()),
         };
+        let top = self.gll_y[rows - 1].order();
         let node = |e: usize, a: usize| match side {
-            Side::Bottom => self.node(e * self.gll_x.order() + a, 0),
-            Side::Top => self.node(e * self.gll_x.order() + a, last),
-            Side::Left => self.node(0, self.first_line[e] + a),
-            Side::Right => self.node(last, self.first_line[e] + a),
+            Side::Bottom => self.element_node(0, e, a, 0),
+            Side::Top => self.element_node(rows - 1, e, a, top),
+            Side::Left => self.element_node(e, 0, 0, a),
+            Side::Right => self.element_node(e, columns - 1, self.gll_x.order(), a),
         };
         for (e, rule) in rules.iter().enumerate() {
             let (x0, x1) = (lines[e], lines[e + 1]);

@@ -11,6 +11,11 @@
 //!
 //! The nodes form a tensor grid: node (i, j) sits at `(x_nodes_m[i], y_nodes_m[j])`, index
 //! `j * nx + i`, DOFs `2 * node + component` (as the T3 mesh numbers them).
+//!
+//! A crack ([`SemModel::split_crack`]) splits the nodes of a horizontal element edge line
+//! (split nodes, as SEM2DPACK does for faults): their duplicates are appended after the
+//! grid, and the element row below the line reads and writes the duplicates, the row above
+//! the originals. Viscous springs ([`SemModel::viscous_springs`]) add a diagonal stiffness.
 
 pub mod gll;
 mod layered;
@@ -18,8 +23,9 @@ mod layered;
 pub use layered::SemSpec;
 
 use crate::error::{Error, Result};
+use crate::fem::{VISCOUS_SPRING_ALPHA_N, VISCOUS_SPRING_ALPHA_T};
 use crate::material::Material;
-use crate::mesh::Side;
+use crate::mesh::{Crack, CrackPair, Side};
 use gll::Gll;
 use rayon::prelude::*;
 
@@ -46,6 +52,11 @@ pub struct SemModel {
     /// (DOF, c) of the absorbing edges' dashpots (none unless set, see
     /// [`SemModel::lysmer_dashpots`]).
     pub dashpots: Vec<(usize, f64)>,
+    /// (DOF, k) of the diagonal springs of viscous-spring edges (none unless set, see
+    /// [`SemModel::viscous_springs`]), added to K u in this order.
+    pub springs: Vec<(usize, f64)>,
+    /// The crack's split node line, if any ([`SemModel::split_crack`]).
+    split: Option<Split>,
     gll_x: Gll,
     /// GLL rule of each element row (its order across y).
     gll_y: Vec<Gll>,
@@ -57,6 +68,33 @@ pub struct SemModel {
     derivative_y_t: Vec<Vec<f64>>,
     /// First node row of each element row.
     first_line: Vec<usize>,
+}
+
+/// The split node line of a crack: the element row below it reads and writes the duplicates
+/// of node columns `first..=last` of node row `line`, numbered from `first_duplicate` on.
+#[derive(Clone, Debug)]
+struct Split {
+    /// The element row whose top node line is the lower face.
+    row_below: usize,
+    /// Node row of the crack line.
+    line: usize,
+    /// First and last split node column.
+    first: usize,
+    last: usize,
+    /// Index of the first duplicate (the number of grid nodes).
+    first_duplicate: usize,
+    /// The node pairs, as the contact solver takes them.
+    crack: Crack,
+}
+
+impl Split {
+    /// The duplicate (lower-face node) of node column `i` of the crack line, if it is split.
+    #[inline(always)]
+    fn duplicate(&self, i: usize) -> Option<usize> {
+        (self.first..=self.last)
+            .contains(&i)
+            .then(|| self.first_duplicate + i - self.first)
+    }
 }
 
 /// Scratch of [`SemModel::stiffness_times`], allocated once per model size: per element row,
@@ -135,6 +173,8 @@ impl SemModel {
             lumped_mass: Vec::new(),
             fixed_dofs: Vec::new(),
             dashpots: Vec::new(),
+            springs: Vec::new(),
+            split: None,
             gll_x,
             gll_y,
             derivative_x,
@@ -152,14 +192,194 @@ impl SemModel {
         self.x_nodes_m.len()
     }
 
-    /// Number of degrees of freedom (2 per node).
+    /// Number of degrees of freedom (2 per node, the crack's duplicates included).
     pub fn dofs(&self) -> usize {
-        2 * self.x_nodes_m.len() * self.y_nodes_m.len()
+        2 * self.nodes()
     }
 
-    /// Node index of node column `i`, node row `j`.
+    /// Number of nodes: the grid's, then the crack's duplicates.
+    pub fn nodes(&self) -> usize {
+        self.grid_nodes() + self.split.as_ref().map_or(0, |s| s.last + 1 - s.first)
+    }
+
+    /// Number of grid nodes (without the crack's duplicates).
+    fn grid_nodes(&self) -> usize {
+        self.x_nodes_m.len() * self.y_nodes_m.len()
+    }
+
+    /// Node index of node column `i`, node row `j` (on a crack line: the upper face).
     pub fn node(&self, i: usize, j: usize) -> usize {
         j * self.nx() + i
+    }
+
+    /// The global node of local node (a, b) (a along x, b across the row) of the element in
+    /// element row `r`, element column `c`: the grid node, or on the top line of the row just
+    /// below a crack the lower-face duplicate where the line is split.
+    pub(crate) fn element_node(&self, r: usize, c: usize, a: usize, b: usize) -> usize {
+        let i = c * self.gll_x.order() + a;
+        if let Some(s) = self.split.as_ref() {
+            if r == s.row_below && b == self.gll_y[r].order() {
+                if let Some(d) = s.duplicate(i) {
+                    return d;
+                }
+            }
+        }
+        self.node(i, self.first_line[r] + b)
+    }
+
+    /// Position (x, y) of `node` (m), `node < self.nodes()`; a duplicate sits where its
+    /// upper-face node does.
+    pub fn node_position(&self, node: usize) -> [f64; 2] {
+        let nx = self.nx();
+        match self.split.as_ref().filter(|s| node >= s.first_duplicate) {
+            Some(s) => [
+                self.x_nodes_m[s.first + node - s.first_duplicate],
+                self.y_nodes_m[s.line],
+            ],
+            None => [self.x_nodes_m[node % nx], self.y_nodes_m[node / nx]],
+        }
+    }
+
+    /// The crack, if one was split ([`SemModel::split_crack`]).
+    pub fn crack(&self) -> Option<&Crack> {
+        self.split.as_ref().map(|s| &s.crack)
+    }
+
+    /// Splits the node line of a horizontal crack at height `y_m` from `x0_m` to `x1_m`
+    /// (report Sec. 4.9 with split nodes): `y_m` must be an interior element row line and the
+    /// tips node columns (within 1e-9 of the rectangle's diagonal). Every node of the line
+    /// strictly between the tips gets a duplicate, appended after the existing nodes in x
+    /// order; a tip on the left or right edge is split too (a through-crack), an interior
+    /// tip stays shared. The original keeps the element row above (master, upper face), the
+    /// duplicate takes the row below (slave, lower face), each with its own side's mass.
+    /// A fixed DOF of a split node is fixed on both faces. Split before setting dashpots or
+    /// springs (their edge weights depend on the faces); one crack per model.
+    pub fn split_crack(&mut self, y_m: f64, x0_m: f64, x1_m: f64) -> Result<Crack> {
+        if self.split.is_some() {
+            return Err(Error::invalid(
+                "crack",
+                format!("y {y_m} m"),
+                "the model has a crack already (one per model)",
+            ));
+        }
+        if !(self.dashpots.is_empty() && self.springs.is_empty()) {
+            return Err(Error::invalid(
+                "crack",
+                format!("y {y_m} m"),
+                "split the crack before setting dashpots or springs (their weights depend on the faces)",
+            ));
+        }
+        let (width, height) = (
+            self.columns_m[self.columns_m.len() - 1] - self.columns_m[0],
+            self.rows_m[self.rows_m.len() - 1] - self.rows_m[0],
+        );
+        let tol = 1e-9 * width.hypot(height);
+        let n_rows = self.gll_y.len();
+        let row = (1..n_rows)
+            .find(|&k| (self.rows_m[k] - y_m).abs() <= tol)
+            .ok_or_else(|| {
+                Error::invalid(
+                    "crack.depth_m",
+                    format!("y {y_m} m"),
+                    format!(
+                        "must be an interior element row line (nearest: {} m)",
+                        nearest(&self.rows_m[1..n_rows], y_m)
+                    ),
+                )
+            })?;
+        if !(x0_m < x1_m) {
+            return Err(Error::invalid(
+                "crack.x0_m",
+                format!("{x0_m}..{x1_m} m"),
+                "needs finite tips x0 < x1",
+            ));
+        }
+        let column = |name: &str, x: f64| {
+            self.x_nodes_m
+                .iter()
+                .position(|&c| (c - x).abs() <= tol)
+                .ok_or_else(|| {
+                    Error::invalid(
+                        name,
+                        format!("{x} m"),
+                        format!(
+                            "must be a node column (nearest: {} m)",
+                            nearest(&self.x_nodes_m, x)
+                        ),
+                    )
+                })
+        };
+        let (i0, i1) = (column("crack.x0_m", x0_m)?, column("crack.x1_m", x1_m)?);
+        let last_column = self.nx() - 1;
+        let first = if i0 == 0 { 0 } else { i0 + 1 };
+        let last = if i1 == last_column { i1 } else { i1 - 1 };
+        if first > last {
+            return Err(Error::invalid(
+                "crack.x1_m",
+                format!("{x0_m}..{x1_m} m"),
+                "no node column lies strictly between the tips",
+            ));
+        }
+        let line = self.first_line[row];
+        let first_duplicate = self.grid_nodes();
+        let pairs = (first..=last)
+            .map(|i| CrackPair {
+                master: self.node(i, line),
+                slave: first_duplicate + i - first,
+            })
+            .collect();
+        let crack = Crack {
+            y_m: self.rows_m[row],
+            x0_m: self.x_nodes_m[i0],
+            x1_m: self.x_nodes_m[i1],
+            pairs,
+        };
+        let split = Split {
+            row_below: row - 1,
+            line,
+            first,
+            last,
+            first_duplicate,
+            crack: crack.clone(),
+        };
+        let held: Vec<usize> = split
+            .crack
+            .pairs
+            .iter()
+            .flat_map(|p| [(p.master, p.slave, 0), (p.master, p.slave, 1)])
+            .filter(|&(m, _, k)| self.fixed_dofs.contains(&(2 * m + k)))
+            .map(|(_, s, k)| 2 * s + k)
+            .collect();
+        self.fixed_dofs.extend(held);
+        self.split = Some(split);
+        self.lumped_mass = self.assemble_mass();
+        Ok(crack)
+    }
+
+    /// Checks that the fixed DOFs, dashpots and springs name DOFs of the model, and that the
+    /// dashpot and spring coefficients are finite and >= 0, naming the first that is not.
+    pub fn check(&self) -> Result<()> {
+        let dofs = self.dofs();
+        if let Some(&d) = self.fixed_dofs.iter().find(|&&d| d >= dofs) {
+            return Err(Error::invalid(
+                "fixed_dofs",
+                d,
+                format!("DOF must be < {dofs}"),
+            ));
+        }
+        for (name, set) in [("dashpots", &self.dashpots), ("springs", &self.springs)] {
+            if let Some(&(d, c)) = set
+                .iter()
+                .find(|&&(d, c)| d >= dofs || !(c.is_finite() && c >= 0.0))
+            {
+                return Err(Error::invalid(
+                    name,
+                    format!("DOF {d} coefficient {c}"),
+                    format!("DOF must be < {dofs} and the coefficient finite and >= 0"),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Scratch for [`SemModel::stiffness_times`].
@@ -193,7 +413,7 @@ impl SemModel {
                 let jx = 0.5 * (self.columns_m[c + 1] - self.columns_m[c]);
                 for b in 0..=gy.order() {
                     for a in 0..=px {
-                        let node = self.node(c * px + a, self.first_line[r] + b);
+                        let node = self.element_node(r, c, a, b);
                         let m = rho * self.gll_x.weights[a] * gy.weights[b] * jx * jy;
                         mass[2 * node] += m;
                         mass[2 * node + 1] += m;
@@ -209,7 +429,9 @@ impl SemModel {
     /// (O(p^3) per element), stresses sigma = C eps, then the transposed derivatives.
     /// Element rows run in parallel into their own force lines; node rows then gather from
     /// the one or two element rows that hold them, in a fixed order (bit-identical for any
-    /// thread count). Allocates nothing.
+    /// thread count). On a crack line the split columns take the row above only, and their
+    /// duplicates the row below; then the springs add k u on their DOFs, in order.
+    /// Allocates nothing.
     pub fn stiffness_times(&self, u: &[f64], out: &mut [f64], work: &mut SemWorkspace) {
         assert_eq!(u.len(), self.dofs());
         assert_eq!(out.len(), self.dofs());
@@ -219,7 +441,8 @@ impl SemModel {
             .for_each(|(r, row)| self.row_forces(r, u, row));
         let nx = self.nx();
         let rows = &work.rows;
-        out.par_chunks_mut(2 * nx)
+        let (grid, faces) = out.split_at_mut(2 * self.grid_nodes());
+        grid.par_chunks_mut(2 * nx)
             .enumerate()
             .for_each(|(j, line)| {
                 // the element row whose lines start at or below j, and its local line
@@ -230,11 +453,32 @@ impl SemModel {
                 if b == 0 && r > 0 {
                     let below = self.gll_y[r - 1].order();
                     let lower = &rows[r - 1].force[below * 2 * nx..(below + 1) * 2 * nx];
-                    for (o, l) in line.iter_mut().zip(lower) {
-                        *o += l;
+                    match self.split.as_ref().filter(|s| s.line == j) {
+                        None => {
+                            for (o, l) in line.iter_mut().zip(lower) {
+                                *o += l;
+                            }
+                        }
+                        Some(s) => {
+                            let pairs = line.chunks_exact_mut(2).zip(lower.chunks_exact(2));
+                            for (i, (o, l)) in pairs.enumerate() {
+                                if s.duplicate(i).is_none() {
+                                    o[0] += l[0];
+                                    o[1] += l[1];
+                                }
+                            }
+                        }
                     }
                 }
             });
+        if let Some(s) = &self.split {
+            let top = self.gll_y[s.row_below].order() * 2 * nx;
+            let lower = &rows[s.row_below].force[top + 2 * s.first..top + 2 * (s.last + 1)];
+            faces.copy_from_slice(lower);
+        }
+        for &(d, k) in &self.springs {
+            out[d] += k * u[d];
+        }
     }
 
     /// Forces of element row `r` on its own node lines. The element kernel is compiled for
@@ -287,6 +531,15 @@ impl SemModel {
             for (a, v) in u[start..start + 2 * N].chunks_exact(2).enumerate() {
                 ux[b][a] = v[0];
                 uy[b][a] = v[1];
+            }
+        }
+        if let Some(s) = self.split.as_ref().filter(|s| s.row_below == r) {
+            // the top line is the crack's lower face where it is split
+            for a in 0..N {
+                if let Some(d) = s.duplicate(i0 + a) {
+                    ux[nby - 1][a] = u[2 * d];
+                    uy[nby - 1][a] = u[2 * d + 1];
+                }
             }
         }
         for b in 0..nby {
@@ -345,30 +598,40 @@ impl SemModel {
     /// GLL quadrature of a side: for every element edge on it, each of its nodes with the
     /// weight w_a (h / 2) of its GLL point and the element row (or column) it belongs to,
     /// so that sum weight f(node) = integral of f along the side for polynomials of degree
-    /// up to 2N - 1 per element.
+    /// up to 2N - 1 per element. A side a through-crack ends on has its split node once per
+    /// face (the duplicate for the row below).
     pub fn side_quadrature(&self, side: Side) -> Vec<(usize, f64, usize)> {
-        let (nx, ny) = (self.nx(), self.y_nodes_m.len());
         let mut out = Vec::new();
+        let (px, columns) = (self.gll_x.order(), self.columns_m.len() - 1);
         match side {
             Side::Bottom | Side::Top => {
-                let (j, row) = match side {
-                    Side::Bottom => (0, 0),
-                    _ => (ny - 1, self.gll_y.len() - 1),
+                let row = if side == Side::Bottom {
+                    0
+                } else {
+                    self.gll_y.len() - 1
                 };
-                let px = self.gll_x.order();
-                for c in 0..self.columns_m.len() - 1 {
+                let b = if side == Side::Bottom {
+                    0
+                } else {
+                    self.gll_y[row].order()
+                };
+                for c in 0..columns {
                     let jx = 0.5 * (self.columns_m[c + 1] - self.columns_m[c]);
                     for (a, w) in self.gll_x.weights.iter().enumerate() {
-                        out.push((self.node(c * px + a, j), w * jx, row));
+                        out.push((self.element_node(row, c, a, b), w * jx, row));
                     }
                 }
             }
             Side::Left | Side::Right => {
-                let i = if side == Side::Left { 0 } else { nx - 1 };
+                let (c, a) = if side == Side::Left {
+                    (0, 0)
+                } else {
+                    (columns - 1, px)
+                };
                 for (r, g) in self.gll_y.iter().enumerate() {
                     let jy = 0.5 * (self.rows_m[r + 1] - self.rows_m[r]);
                     for (b, w) in g.weights.iter().enumerate() {
-                        out.push((self.node(i, self.first_line[r] + b), w * jy, r));
+                        out.push((self.element_node(r, c, a, b), w * jy, r));
                     }
                 }
             }
@@ -379,7 +642,8 @@ impl SemModel {
     /// Interpolation weights of the displacement at `(x_m, y_m)`: the element holding the
     /// point (the lower one on a shared line), its local coordinates, and the tensor products
     /// l_a(xi) l_b(eta) of the GLL Lagrange polynomials at its nodes, zeros dropped. A point on
-    /// a node gets that node alone with weight exactly 1. `None` outside the rectangle.
+    /// a node gets that node alone with weight exactly 1 (on a crack line: the lower face's
+    /// node where the line is split). `None` outside the rectangle.
     pub fn point_weights(&self, x_m: f64, y_m: f64) -> Option<Vec<(usize, f64)>> {
         let c = containing(&self.columns_m, x_m)?;
         let r = containing(&self.rows_m, y_m)?;
@@ -388,13 +652,12 @@ impl SemModel {
         };
         let lx = self.gll_x.lagrange_at(local(&self.columns_m, c, x_m));
         let ly = self.gll_y[r].lagrange_at(local(&self.rows_m, r, y_m));
-        let px = self.gll_x.order();
         let mut weights = Vec::new();
         for (b, wy) in ly.iter().enumerate() {
             for (a, wx) in lx.iter().enumerate() {
                 let w = wx * wy;
                 if w != 0.0 {
-                    weights.push((self.node(c * px + a, self.first_line[r] + b), w));
+                    weights.push((self.element_node(r, c, a, b), w));
                 }
             }
         }
@@ -428,6 +691,36 @@ impl SemModel {
         c.into_iter().collect()
     }
 
+    /// The springs of a viscous-spring edge on `side` (Liu et al. 2006, as T3's
+    /// [`crate::fem::AbsorbingEdge`]), with GLL edge weights: per edge node,
+    /// k_N = ALPHA_N G w / R on the normal DOF and k_T = ALPHA_T G w / R on the tangential one,
+    /// G = rho V_s^2 of the element the node's weight w comes from, R = `distance_m` from the
+    /// wave source (a node shared by two element rows gets both halves). Sorted by DOF; add
+    /// them to [`SemModel::springs`] (several sides: extend).
+    pub fn viscous_springs(&self, side: Side, distance_m: f64) -> Result<Vec<(usize, f64)>> {
+        if !(distance_m.is_finite() && distance_m > 0.0) {
+            return Err(Error::invalid(
+                "absorber.source_distance_m",
+                distance_m,
+                "must be a positive distance (m)",
+            ));
+        }
+        let normal = match side {
+            Side::Bottom | Side::Top => 1,
+            Side::Left | Side::Right => 0,
+        };
+        let mut k = std::collections::BTreeMap::<usize, f64>::new();
+        for (node, weight, row) in self.side_quadrature(side) {
+            let mat = &self.materials[self.row_material[row]];
+            let g = mat.density_kg_m3 * mat.wave_speeds().s_m_s.powi(2);
+            *k.entry(2 * node + normal).or_default() +=
+                VISCOUS_SPRING_ALPHA_N * g * weight / distance_m;
+            *k.entry(2 * node + 1 - normal).or_default() +=
+                VISCOUS_SPRING_ALPHA_T * g * weight / distance_m;
+        }
+        Ok(k.into_iter().collect())
+    }
+
     /// Largest eigenvalue of M^-1 K over the `free` DOFs (Lanczos, as for the T3 model), and
     /// the iterations used; dt_crit = 2 / sqrt of it.
     pub fn max_eigenvalue(&self, free: &[bool]) -> (f64, usize) {
@@ -440,6 +733,15 @@ impl SemModel {
 
 /// Highest polynomial order offered (the GLL points are accurate to round-off well beyond).
 pub const MAX_ORDER: usize = 16;
+
+/// The entry of `values` nearest to `v`.
+fn nearest(values: &[f64], v: f64) -> f64 {
+    values
+        .iter()
+        .copied()
+        .min_by(|a, b| (a - v).abs().total_cmp(&(b - v).abs()))
+        .unwrap_or(f64::NAN)
+}
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()

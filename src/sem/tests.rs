@@ -1,7 +1,7 @@
 use super::*;
 use crate::exact::RollerMode;
 use crate::material::{Orthotropic, Plane};
-use crate::mesh::Side;
+use crate::mesh::{Crack, Side};
 
 fn material(name: &str) -> Material {
     Orthotropic::preset(name)
@@ -403,4 +403,266 @@ fn energy_balance_closes_on_a_closed_box() {
     );
     assert!(r.source_work_j > 0.0, "{r:?}");
     assert!(r.energy_residual_peak < 1e-6, "{r:?}");
+}
+
+/// `layered()` with a crack on its first row line (0.5 mm, fabric below, epoxy above) from
+/// node column 3 to node column 10 (interior tips: columns 4..=9 split).
+fn cracked() -> (SemModel, Crack) {
+    let mut m = layered();
+    let (x0, x1) = (m.x_nodes_m[3], m.x_nodes_m[10]);
+    let crack = m.split_crack(0.5e-3, x0, x1).expect("crack");
+    (m, crack)
+}
+
+/// `u` of the grid nodes extended to the duplicates with their upper-face values (a field
+/// continuous across the crack).
+fn continuous(m: &SemModel, crack: &Crack, grid: &[f64]) -> Vec<f64> {
+    let mut u = grid.to_vec();
+    u.resize(m.dofs(), 0.0);
+    for p in &crack.pairs {
+        u[2 * p.slave] = u[2 * p.master];
+        u[2 * p.slave + 1] = u[2 * p.master + 1];
+    }
+    u
+}
+
+/// A crack must lie on an interior element row line with its tips on node columns; the
+/// errors name the field and the nearest admissible value.
+#[test]
+fn split_crack_refuses_lines_and_tips_off_the_grid() {
+    let err = |y: f64, x0: f64, x1: f64| {
+        layered()
+            .split_crack(y, x0, x1)
+            .expect_err("refused")
+            .to_string()
+    };
+    let m = layered();
+    let (x0, x1) = (m.x_nodes_m[3], m.x_nodes_m[10]);
+    let e = err(0.3e-3, x0, x1);
+    assert!(e.contains("crack.depth_m") && e.contains("0.0005"), "{e}");
+    for y in [0.0, 1.1e-3, f64::NAN] {
+        assert!(err(y, x0, x1).contains("crack.depth_m"), "y {y}");
+    }
+    assert!(err(0.5e-3, x0 + 1e-6, x1).contains("crack.x0_m"));
+    assert!(err(0.5e-3, x0, x1 - 1e-6).contains("crack.x1_m"));
+    assert!(err(0.5e-3, x1, x0).contains("crack.x0_m"));
+    let e = err(0.5e-3, x0, m.x_nodes_m[4]);
+    assert!(e.contains("strictly between"), "{e}");
+    let (mut m, _) = cracked();
+    assert!(m.split_crack(0.52e-3, x0, x1).is_err(), "a second crack");
+    let mut m = layered();
+    m.dashpots = m.lysmer_dashpots(&[Side::Left]);
+    assert!(
+        m.split_crack(0.5e-3, x0, x1).is_err(),
+        "split after dashpots"
+    );
+}
+
+/// The split nodes get duplicates after the grid, in x order; masters keep their index, the
+/// duplicates sit at the same place, the row below reads them, and a fixed DOF of a split
+/// node is fixed on both faces.
+#[test]
+fn split_crack_appends_lower_face_duplicates_in_x_order() {
+    let mut m = layered();
+    let grid = m.x_nodes_m.len() * m.y_nodes_m.len();
+    let line = m.first_line[1];
+    m.fixed_dofs = vec![2 * m.node(5, line) + 1];
+    let (x0, x1) = (m.x_nodes_m[3], m.x_nodes_m[10]);
+    let crack = m.split_crack(0.5e-3, x0, x1).expect("crack");
+    assert_eq!(crack.pairs.len(), 6);
+    assert_eq!(m.dofs(), 2 * (grid + 6));
+    assert_eq!(m.crack().expect("stored").pairs, crack.pairs);
+    let px = m.gll_x.order();
+    let top = m.gll_y[0].order();
+    for (k, p) in crack.pairs.iter().enumerate() {
+        let i = 4 + k;
+        assert_eq!(p.master, m.node(i, line));
+        assert_eq!(p.slave, grid + k);
+        assert_eq!(m.node_position(p.slave), m.node_position(p.master));
+        assert_eq!(m.node_position(p.master), [m.x_nodes_m[i], 0.5e-3]);
+        // the row below reads the duplicate, the row above the original
+        assert_eq!(m.element_node(0, i / px, i % px, top), p.slave);
+        assert_eq!(m.element_node(1, i / px, i % px, 0), p.master);
+    }
+    // interior tips stay shared
+    assert_eq!(m.element_node(0, 0, 3, top), m.node(3, line));
+    assert_eq!(m.element_node(0, 1, 4, top), m.node(10, line));
+    assert_eq!(
+        m.fixed_dofs,
+        vec![2 * m.node(5, line) + 1, 2 * (grid + 1) + 1]
+    );
+    assert_eq!(m.check().map_err(|e| e.to_string()), Ok(()));
+}
+
+/// Each face carries its own side's mass: with a through-crack the part below (grid rows
+/// under the line and the duplicates) weighs rho h w of the rows below exactly, the part
+/// above that of the rows above.
+#[test]
+fn crack_faces_carry_their_own_sides_mass() {
+    let mut m = layered();
+    let width = 2.0e-3;
+    m.split_crack(0.5e-3, 0.0, width).expect("through-crack");
+    let nx = m.nx();
+    let line = m.first_line[1];
+    let (mut below, mut above) = (0.0, 0.0);
+    for node in 0..m.dofs() / 2 {
+        let mass = m.lumped_mass[2 * node];
+        assert_eq!(mass, m.lumped_mass[2 * node + 1]);
+        if node < line * nx || node >= nx * m.y_nodes_m.len() {
+            below += mass;
+        } else {
+            above += mass;
+        }
+    }
+    let rho = |r: usize| m.materials[m.row_material[r]].density_kg_m3;
+    let exact_below = rho(0) * 0.5e-3 * width;
+    let exact_above = rho(1) * 0.02e-3 * width + rho(2) * 0.58e-3 * width;
+    assert!((below / exact_below - 1.0).abs() < 1e-13, "{below:e}");
+    assert!((above / exact_above - 1.0).abs() < 1e-13, "{above:e}");
+}
+
+/// On a field continuous across the crack, the split K gives every node off the crack the
+/// unsplit force, and each pair's two faces together the unsplit force of its node (K is
+/// the same sum over elements, only the crack line's assembly is split): to round-off.
+/// The split K stays symmetric for fields that differ across the faces.
+#[test]
+fn split_stiffness_sums_to_the_unsplit_one() {
+    let plain = layered();
+    let (m, crack) = cracked();
+    let grid = field(&plain, |x, y| [(3e3 * x).sin() * y, (2e3 * y).cos() * x]);
+    let whole = times(&plain, &grid);
+    let mut split = times(&m, &continuous(&m, &crack, &grid));
+    for p in &crack.pairs {
+        for k in 0..2 {
+            split[2 * p.master + k] += split[2 * p.slave + k];
+        }
+    }
+    split.truncate(whole.len());
+    let diff: Vec<f64> = split.iter().zip(&whole).map(|(a, b)| a - b).collect();
+    assert!(norm(&diff) < 1e-13 * norm(&whole), "{:e}", norm(&diff));
+    let mut u = continuous(&m, &crack, &grid);
+    let mut v = continuous(
+        &m,
+        &crack,
+        &field(&plain, |x, y| [x * x * 1e3 - y, (5e3 * x * y).sin()]),
+    );
+    for (k, p) in crack.pairs.iter().enumerate() {
+        u[2 * p.slave + 1] += 1e-4 * k as f64;
+        v[2 * p.slave] -= 2e-4 * (k as f64).sqrt();
+    }
+    let (a, b) = (dot(&v, &times(&m, &u)), dot(&u, &times(&m, &v)));
+    assert!(
+        (a - b).abs() < 1e-12 * a.abs().max(b.abs()),
+        "{a:e} vs {b:e}"
+    );
+}
+
+/// A through-crack cuts the rectangle in two bodies: each may translate and rotate on its
+/// own (the upper part rotated, the lower one translated) without straining, so K maps
+/// that to zero, to round-off relative to a straining field of the same size.
+#[test]
+fn through_crack_parts_move_rigidly_apart() {
+    let mut m = layered();
+    m.split_crack(0.52e-3, 0.0, 2.0e-3).expect("through-crack");
+    let (nx, line, grid) = (m.nx(), m.first_line[2], m.nx() * m.y_nodes_m.len());
+    let mut u = vec![0.0; m.dofs()];
+    for node in 0..m.dofs() / 2 {
+        let [x, y] = m.node_position(node);
+        let upper = node >= line * nx && node < grid;
+        let v = if upper { [-y, x] } else { [1e-3, -2e-3] };
+        u[2 * node] = v[0];
+        u[2 * node + 1] = v[1];
+    }
+    let mut strained = vec![0.0; m.dofs()];
+    for node in 0..m.dofs() / 2 {
+        let [x, y] = m.node_position(node);
+        strained[2 * node] = 1e3 * x * y;
+        strained[2 * node + 1] = 1e3 * x * x;
+    }
+    let scale = norm(&times(&m, &strained));
+    let f = times(&m, &u);
+    assert!(norm(&f) < 1e-12 * scale, "{:e} vs {scale:e}", norm(&f));
+}
+
+/// With a crack and springs the stiffness product is still bit-identical whatever the
+/// number of threads, and includes the springs: K u - K_0 u = k u on the spring DOFs.
+#[test]
+fn cracked_stiffness_with_springs_is_bit_identical_across_thread_counts() {
+    let (mut m, crack) = cracked();
+    let plain = field(&layered(), |x, y| {
+        [(3e3 * x).sin() * y, (2e3 * y).cos() * x]
+    });
+    let mut u = continuous(&m, &crack, &plain);
+    u[2 * crack.pairs[2].slave + 1] += 1e-4;
+    let without = times(&m, &u);
+    m.springs = m.viscous_springs(Side::Bottom, 5e-3).expect("springs");
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool")
+            .install(|| times(&m, &u))
+    };
+    let with = run(1);
+    assert_eq!(with, run(2));
+    for (d, (a, b)) in with.iter().zip(&without).enumerate() {
+        let k = m.springs.iter().find(|s| s.0 == d).map_or(0.0, |s| s.1);
+        assert_eq!(*a, b + k * u[d], "DOF {d}");
+    }
+}
+
+/// The springs of a side add up to ALPHA G L / R over its length (GLL weights sum to each
+/// element edge's length; G per element row on the left side), normal and tangential,
+/// exact to round-off; on a side a through-crack ends on, the duplicate takes its share
+/// and the sum is unchanged. R <= 0 is refused naming the field.
+#[test]
+fn viscous_springs_of_a_side_sum_to_alpha_g_length_over_r() {
+    use crate::fem::{VISCOUS_SPRING_ALPHA_N, VISCOUS_SPRING_ALPHA_T};
+    let r = 7e-3;
+    let mut m = layered();
+    m.split_crack(0.52e-3, 0.0, 2.0e-3).expect("through-crack");
+    let g = |row: usize| {
+        let mat = &m.materials[m.row_material[row]];
+        mat.density_kg_m3 * mat.wave_speeds().s_m_s.powi(2)
+    };
+    let left: f64 = (0..3).map(|k| g(k) * (m.rows_m[k + 1] - m.rows_m[k])).sum();
+    for (side, gl, normal) in [
+        (Side::Left, left, 0),
+        (Side::Right, left, 0),
+        (Side::Bottom, g(0) * 2e-3, 1),
+        (Side::Top, g(2) * 2e-3, 1),
+    ] {
+        let springs = m.viscous_springs(side, r).expect("springs");
+        let sum = |axis: usize| -> f64 {
+            springs
+                .iter()
+                .filter(|s| s.0 % 2 == axis)
+                .map(|s| s.1)
+                .sum()
+        };
+        let (n, t) = (sum(normal), sum(1 - normal));
+        let (exact_n, exact_t) = (
+            VISCOUS_SPRING_ALPHA_N * gl / r,
+            VISCOUS_SPRING_ALPHA_T * gl / r,
+        );
+        assert!(
+            (n / exact_n - 1.0).abs() < 1e-14,
+            "{side:?}: {n:e} vs {exact_n:e}"
+        );
+        assert!(
+            (t / exact_t - 1.0).abs() < 1e-14,
+            "{side:?}: {t:e} vs {exact_t:e}"
+        );
+        assert!(springs.windows(2).all(|w| w[0].0 < w[1].0));
+    }
+    let grid = m.nx() * m.y_nodes_m.len();
+    let left = m.viscous_springs(Side::Left, r).expect("springs");
+    assert!(
+        left.iter().any(|s| s.0 == 2 * grid),
+        "the duplicate's share"
+    );
+    for bad in [0.0, -1.0, f64::NAN] {
+        let e = m.viscous_springs(Side::Top, bad).expect_err("refused");
+        assert!(e.to_string().contains("absorber.source_distance_m"), "{e}");
+    }
 }

@@ -3,7 +3,9 @@
 //! steppers are generic over it, so linear triangles ([`Fem`]) and spectral elements
 //! ([`SemModel`]) run through the same loop.
 
+use crate::error::Result;
 use crate::fem::{Model, StiffnessOperator};
+use crate::mesh::Crack;
 use crate::sem::{SemModel, SemWorkspace};
 use rayon::prelude::*;
 
@@ -24,6 +26,20 @@ pub trait Discretisation: Sync {
     fn workspace(&self) -> Self::Workspace;
     /// `out = K u`.
     fn stiffness_times(&self, u: &[f64], out: &mut [f64], work: &mut Self::Workspace);
+
+    /// x of a node (m), for the crack traces.
+    fn node_x(&self, node: usize) -> f64;
+
+    /// The crack whose node pairs the contact law acts on, if any (none by default).
+    fn crack(&self) -> Option<&Crack> {
+        None
+    }
+
+    /// Checks the body's own data before a run (DOF indices in range), naming the first
+    /// field that is wrong; nothing to check by default.
+    fn check(&self) -> Result<()> {
+        Ok(())
+    }
 
     /// Number of DOFs.
     fn dofs(&self) -> usize {
@@ -96,6 +112,12 @@ impl Discretisation for Fem<'_> {
         &self.model.periodic
     }
     fn workspace(&self) {}
+    fn node_x(&self, node: usize) -> f64 {
+        self.model.mesh.nodes[node][0]
+    }
+    fn crack(&self) -> Option<&Crack> {
+        self.model.crack.as_ref()
+    }
     fn stiffness_times(&self, u: &[f64], out: &mut [f64], _: &mut ()) {
         self.op.mul(u, out);
     }
@@ -129,6 +151,15 @@ impl Discretisation for SemModel {
     }
     fn workspace(&self) -> SemWorkspace {
         SemModel::workspace(self)
+    }
+    fn node_x(&self, node: usize) -> f64 {
+        self.node_position(node)[0]
+    }
+    fn crack(&self) -> Option<&Crack> {
+        SemModel::crack(self)
+    }
+    fn check(&self) -> Result<()> {
+        SemModel::check(self)
     }
     fn stiffness_times(&self, u: &[f64], out: &mut [f64], work: &mut SemWorkspace) {
         SemModel::stiffness_times(self, u, out, work);

@@ -532,10 +532,10 @@ fn run_explicit(
     let stab = config
         .stability
         .unwrap_or_else(|| stability::estimate(model));
-    let node_x = |node: usize| model.mesh.nodes[node][0];
+    let node_x = |node: usize| fem.node_x(node);
     let body = BodyShape {
         dofs: model.dofs(),
-        crack: model.crack.as_ref(),
+        crack: fem.crack(),
         node_x: &node_x,
     };
     central_difference(
@@ -549,8 +549,9 @@ fn run_explicit(
 }
 
 /// Central differences with lumped mass on any discretisation (spectral elements, or a
-/// custom one) without a crack, with the standard observers: the same loop, checks and
-/// report as [`run`] on a T3 model. `dt_crit_s` is the body's critical step (e.g.
+/// custom one), with its crack ([`Discretisation::crack`]) under `config.contact` and the
+/// standard observers: the same loop, checks and report as [`run`] on a T3 model.
+/// `dt_crit_s` is the body's critical step (e.g.
 /// [`crate::sem::SemModel::max_eigenvalue`]); `config.stability` is not used.
 pub fn run_central_difference_on<D: Discretisation>(
     body: &D,
@@ -559,11 +560,13 @@ pub fn run_central_difference_on<D: Discretisation>(
     receivers: &[Receiver],
     config: &RunConfig,
 ) -> Result<RunOutput> {
+    body.check()?;
     validate(body.dofs(), sources, receivers, config)?;
+    let node_x = |node: usize| body.node_x(node);
     let shape = BodyShape {
         dofs: body.dofs(),
-        crack: None,
-        node_x: &|_| 0.0,
+        crack: body.crack(),
+        node_x: &node_x,
     };
     central_difference(
         body,
