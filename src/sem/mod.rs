@@ -45,7 +45,8 @@ pub struct SemModel {
     pub materials: Vec<Material>,
     /// Material of each element row (index into `materials`).
     pub row_material: Vec<usize>,
-    /// Diagonal mass per DOF, M_kk = sum over elements of rho w_a w_b J (kg).
+    /// Diagonal mass per DOF, M_kk = sum over elements of rho w_a w_b J (kg); on a crack each
+    /// face sums its own side's elements.
     pub lumped_mass: Vec<f64>,
     /// DOFs held at zero (none unless set).
     pub fixed_dofs: Vec<usize>,
@@ -722,7 +723,8 @@ impl SemModel {
     }
 
     /// Largest eigenvalue of M^-1 K over the `free` DOFs (Lanczos, as for the T3 model), and
-    /// the iterations used; dt_crit = 2 / sqrt of it.
+    /// the iterations used; dt_crit = 2 / sqrt of it. K is [`SemModel::stiffness_times`]'s:
+    /// with the crack's faces apart and the springs; `free` has one entry per DOF.
     pub fn max_eigenvalue(&self, free: &[bool]) -> (f64, usize) {
         let work = std::cell::RefCell::new(self.workspace());
         crate::solve::stability::lanczos_max_eigenvalue_of(&self.lumped_mass, free, |x, y| {

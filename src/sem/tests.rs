@@ -666,3 +666,30 @@ fn viscous_springs_of_a_side_sum_to_alpha_g_length_over_r() {
         assert!(e.to_string().contains("absorber.source_distance_m"), "{e}");
     }
 }
+
+/// `check` names the first fixed DOF, dashpot or spring outside the model (the duplicates
+/// counted) or with a bad coefficient; a run refuses such a body before it starts.
+#[test]
+fn check_names_dofs_outside_the_cracked_model() {
+    let (mut m, crack) = cracked();
+    let last = 2 * crack.pairs[5].slave + 1;
+    m.fixed_dofs = vec![last];
+    m.springs = vec![(last, 1.0)];
+    assert!(m.check().is_ok());
+    m.springs.push((last + 1, 1.0));
+    assert!(m.check().unwrap_err().to_string().contains("springs"));
+    m.springs.pop();
+    m.dashpots = vec![(0, f64::NAN)];
+    assert!(m.check().unwrap_err().to_string().contains("dashpots"));
+    m.dashpots.clear();
+    m.fixed_dofs.push(last + 1);
+    let e = crate::solve::run_central_difference_on(
+        &m,
+        1e-9,
+        &[],
+        &[],
+        &crate::solve::RunConfig::default(),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("fixed_dofs"), "{e}");
+}

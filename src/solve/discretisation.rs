@@ -1,5 +1,6 @@
 //! What a time stepper needs of a space discretisation: a diagonal mass, the constrained DOFs,
-//! the Lysmer-Kuhlemeyer dashpots, periodic ties, and the stiffness applied to a vector. The
+//! the Lysmer-Kuhlemeyer dashpots, periodic ties, the stiffness applied to a vector, and the
+//! crack the contact law acts on (with the nodes' x for its traces). The
 //! steppers are generic over it, so linear triangles ([`Fem`]) and spectral elements
 //! ([`SemModel`]) run through the same loop.
 
