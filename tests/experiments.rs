@@ -59,6 +59,8 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         "measured_channel.csv",
         "measured_channel_fig22.png",
         "measured_channel_h.npy",
+        "sem_target.csv",
+        "sem_target.png",
     ] {
         let path = out.join("plots").join(file);
         let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -125,5 +127,47 @@ fn error_estimate_on_fills_the_estimate_columns() {
             "{table}: {text}"
         );
     }
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The experiments run on spectral elements with `--set discretisation=sem`: the focusing
+/// script writes its figures, snapshot VTU and table from an SEM scene, and an unknown
+/// discretisation is refused naming the parameter.
+#[test]
+fn experiments_run_on_spectral_elements() {
+    let out = std::env::temp_dir().join(format!("trnews-sem-{}", std::process::id()));
+    let run = |kind: &str| {
+        Command::new(env!("CARGO_BIN_EXE_trnews-script"))
+            .arg(Path::new("scripts").join("trnews_focus.rhai"))
+            .args(["--set", "resolution=smoke", "--set"])
+            .arg(format!("discretisation={kind}"))
+            .args(["--quiet", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    let result = run("sem");
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    for file in [
+        "trnews_focus.csv",
+        "trnews_focus.png",
+        "trnews_snapshot.vtu",
+        "trnews_scattered.png",
+    ] {
+        let bytes = std::fs::read(out.join("plots").join(file)).unwrap();
+        assert!(bytes.len() > 100, "{file} is nearly empty");
+    }
+    let table = std::fs::read_to_string(out.join("plots/trnews_focus.csv")).unwrap();
+    assert_eq!(table.lines().count(), 11, "header + 2 scenes x 5 receivers: {table}");
+    let refused = run("q4");
+    let message = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        !refused.status.success() && message.contains("discretisation") && message.contains("q4"),
+        "{message}"
+    );
     let _ = std::fs::remove_dir_all(&out);
 }
