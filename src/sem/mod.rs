@@ -12,6 +12,7 @@
 //! The nodes form a tensor grid: node (i, j) sits at `(x_nodes_m[i], y_nodes_m[j])`, index
 //! `j * nx + i`, DOFs `2 * node + component` (as the T3 mesh numbers them).
 
+mod assembled;
 pub mod gll;
 mod layered;
 
@@ -160,6 +161,12 @@ impl SemModel {
     /// Node index of node column `i`, node row `j`.
     pub fn node(&self, i: usize, j: usize) -> usize {
         j * self.nx() + i
+    }
+
+    /// Global node of local node (a, b) (a along x, b across y) of the element in element
+    /// row `r`, element column `c`: the one map from element to global nodes.
+    pub(crate) fn element_node(&self, r: usize, c: usize, a: usize, b: usize) -> usize {
+        self.node(c * self.gll_x.order() + a, self.first_line[r] + b)
     }
 
     /// Scratch for [`SemModel::stiffness_times`].
