@@ -207,3 +207,12 @@ fn newmark_and_central_differences_agree_on_spectral_elements_at_second_order() 
     assert!((3.9..4.1).contains(&ratio), "{diffs:?}, ratio {ratio}");
     assert!(diffs[0] < 3e-3, "{diffs:?}");
 }
+
+#[test]
+fn a_stiffness_of_another_model_is_refused() {
+    let (small, _) = roller_box(2, 2, 1);
+    let (large, _) = roller_box(3, 2, 1);
+    let k = small.assemble_stiffness();
+    let e = NewmarkBody::sem(&large, &k).err().expect("refused");
+    assert!(e.to_string().contains("stiffness"), "{e}");
+}
