@@ -216,3 +216,37 @@ fn a_stiffness_of_another_model_is_refused() {
     let e = NewmarkBody::sem(&large, &k).err().expect("refused");
     assert!(e.to_string().contains("stiffness"), "{e}");
 }
+
+#[test]
+fn a_body_put_together_by_hand_is_checked() {
+    let (m, _) = roller_box(2, 2, 1);
+    let k = m.assemble_stiffness();
+    let dt = 1e-9;
+    let sources = || SampledSources::new(&[], dt, 2).unwrap();
+    let body = |dashpots, fixed_dofs, mass| NewmarkBody {
+        stiffness: &k,
+        mass: trnews::solve::newmark::Mass::Lumped(mass),
+        dashpots,
+        fixed_dofs,
+    };
+    let n = m.dofs();
+    let short = &m.lumped_mass[..n - 2];
+    let far = [(n, 1.0)];
+    let beyond = [n + 3];
+    for (b, field) in [
+        (body(&[], &[], short), "mass"),
+        (body(&far, &[], &m.lumped_mass), "dashpots"),
+        (body(&[], &beyond, &m.lumped_mass), "fixed_dofs"),
+    ] {
+        let e = Newmark::new(b, dt, sources(), None, None)
+            .err()
+            .expect(field);
+        assert!(e.to_string().contains(field), "{e}");
+    }
+    let wrong = vec![0.0; n - 1];
+    let b = body(&[], &[], &m.lumped_mass);
+    let e = Newmark::new(b, dt, sources(), Some(&wrong), None)
+        .err()
+        .expect("u_0");
+    assert!(e.to_string().contains("initial_displacement"), "{e}");
+}

@@ -105,6 +105,29 @@ impl<'a> NewmarkBody<'a> {
     pub fn dofs(&self) -> usize {
         2 * self.stiffness.nodes()
     }
+
+    /// Refuses a mass, a dashpot or a fixed DOF that does not fit the stiffness (the fields
+    /// are public, so a body can be put together by hand).
+    fn check(&self) -> Result<()> {
+        let n = self.dofs();
+        let mass_dofs = match &self.mass {
+            Mass::Lumped(m) => m.len(),
+            Mass::Consistent(m) => 2 * m.nodes(),
+        };
+        if mass_dofs != n {
+            return Err(Error::invalid(
+                "mass",
+                format!("{mass_dofs} DOFs"),
+                format!("needs the stiffness's {n}"),
+            ));
+        }
+        let dofs = self.dashpots.iter().map(|d| ("dashpots", d.0));
+        let fixed = self.fixed_dofs.iter().map(|&d| ("fixed_dofs", d));
+        if let Some((field, d)) = dofs.chain(fixed).find(|&(_, d)| d >= n) {
+            return Err(Error::invalid(field, d, format!("DOF must be < {n}")));
+        }
+        Ok(())
+    }
 }
 
 /// A sparse Cholesky factor L L^T with its solve workspace allocated once, so that each
@@ -216,6 +239,7 @@ impl<'a> Newmark<'a> {
         initial_displacement: Option<&[f64]>,
         initial_velocity: Option<&[f64]>,
     ) -> Result<Self> {
+        body.check()?;
         let n = body.dofs();
         let mut fixed = vec![false; n];
         for &d in body.fixed_dofs {
@@ -234,16 +258,24 @@ impl<'a> Newmark<'a> {
                 add(d, d, 2.0 / dt * c);
             }
         })?;
-        let start = |x: Option<&[f64]>| {
+        let start = |field: &str, x: Option<&[f64]>| {
             let mut x = x.map_or_else(|| vec![0.0; n], <[f64]>::to_vec);
+            if x.len() != n {
+                return Err(Error::invalid(
+                    field,
+                    format!("{} values", x.len()),
+                    format!("needs {n}"),
+                ));
+            }
             for (d, &f) in fixed.iter().enumerate() {
                 if f {
                     x[d] = 0.0;
                 }
             }
-            x
+            Ok(x)
         };
-        let (u, v) = (start(initial_displacement), start(initial_velocity));
+        let u = start("initial_displacement", initial_displacement)?;
+        let v = start("initial_velocity", initial_velocity)?;
         let mut stepper = Newmark {
             stiffness,
             mass,
