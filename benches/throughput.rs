@@ -22,7 +22,8 @@ use trnews::mesh::{Mesh, Side};
 use trnews::scene::{Body, Scene, SceneSpec};
 use trnews::signal::Signal;
 use trnews::solve::{
-    self, segment_receiver, traction_source, Quantity, RunConfig, Source, StabilityEstimate,
+    self, segment_receiver, traction_source, Discretisation, Fem, Quantity, RunConfig, Source,
+    StabilityEstimate,
 };
 use trnews::trnews as tr;
 
@@ -97,16 +98,22 @@ struct Report {
     sem: Vec<SemRow>,
 }
 
-/// One stiffness product K u of the spectral elements (homogeneous 0/90 fabric block, 16 mm
-/// wide, elements sized for ~100k DOFs at each order) next to the T3 operator's at the same
-/// DOF count.
+/// One stiffness product K u and one explicit step (the predictor u_next = 2u - u_prev -
+/// a K u) of the spectral elements (homogeneous 0/90 fabric block, 16 mm wide, elements
+/// sized for ~100k DOFs at each order) next to the T3 operator's at about the same DOF count.
 #[derive(Serialize)]
 struct SemRow {
     order: usize,
     dofs: usize,
+    t3_dofs: usize,
     threads: usize,
     best_ns_per_dof: f64,
     t3_best_ns_per_dof: f64,
+    /// Explicit step, best over reps of `steps` steps.
+    steps: usize,
+    step_ns_per_dof_step: f64,
+    /// T3's fused explicit step on its mesh.
+    t3_step_ns_per_dof_step: f64,
 }
 
 /// A delayed TR-NEWS sweep on a linear scene: convolving one impulse response vs
@@ -257,11 +264,13 @@ fn timed_run(
     (out.report.wall_time_s / out.report.steps as f64, out)
 }
 
-/// Best time per step (s) of the fused step kernel alone on a smooth random-ish field.
-fn kernel_time(model: &Model, dt: f64, steps: usize, reps: usize) -> f64 {
-    let op = StiffnessOperator::new(model);
-    let n = model.dofs();
-    let a: Vec<f64> = model.lumped_mass.iter().map(|m| dt * dt / m).collect();
+/// Best time per step (s) of a discretisation's explicit predictor alone
+/// (`Discretisation::explicit_update`: the fused kernel for T3, K u then the update for
+/// spectral elements) on a smooth random-ish field.
+fn kernel_time<D: Discretisation>(body: &D, dt: f64, steps: usize, reps: usize) -> f64 {
+    let mut work = body.workspace();
+    let n = body.dofs();
+    let a: Vec<f64> = body.lumped_mass().iter().map(|m| dt * dt / m).collect();
     let mut u: Vec<f64> = (0..n).map(|i| 1e-9 * ((i % 97) as f64 - 48.0)).collect();
     let mut u_prev = u.clone();
     let mut u_next = vec![0.0; n];
@@ -269,7 +278,7 @@ fn kernel_time(model: &Model, dt: f64, steps: usize, reps: usize) -> f64 {
     for r in 0..=reps {
         let t = Instant::now();
         for _ in 0..steps {
-            op.explicit_update(&a, &u_prev, &u, &mut u_next);
+            body.explicit_update(&a, &u_prev, &u, &mut u_next, &mut work);
             std::mem::swap(&mut u_prev, &mut u);
             std::mem::swap(&mut u, &mut u_next);
         }
@@ -465,7 +474,7 @@ fn main() {
                     .map(|_| timed_run(&model, &sources, &receivers, dt, steps, None).0)
                     .fold(f64::INFINITY, f64::min)
             });
-            let kernel = pool(threads).install(|| kernel_time(&model, dt, steps, reps));
+            let kernel = pool(threads).install(|| kernel_time(&Fem::new(&model), dt, steps, reps));
             let ns = best * 1e9 / model.dofs() as f64;
             let kns = kernel * 1e9 / model.dofs() as f64;
             println!(
@@ -635,7 +644,9 @@ fn main() {
     // --- spectral elements -------------------------------------------------------------
     let mut sem_rows = Vec::new();
     if run_section("sem") {
-        println!("\nStiffness product K u, ~100k DOFs, 0/90 fabric block (best of reps):");
+        println!(
+            "\nSpectral elements vs T3, ~100k DOFs, 0/90 fabric block: K u and the explicit step (best of reps):"
+        );
         let fabric = trnews::material::Orthotropic::preset("fabric_0_90")
             .and_then(|m| m.reduce(Plane::Strain))
             .expect("fabric");
@@ -665,8 +676,18 @@ fn main() {
             )
             .expect("t3");
             let op = StiffnessOperator::new(&model);
+            let fem = Fem::new(&model);
             let u: Vec<f64> = (0..n).map(|k| (k as f64 * 0.37).sin()).collect();
             let u3: Vec<f64> = (0..model.dofs()).map(|k| (k as f64 * 0.37).sin()).collect();
+            // a tenth of a CFL step on the smallest GLL gap: stable, and the cost does not
+            // depend on the step
+            let speeds = fabric.wave_speeds();
+            let gap =
+                (sem.x_nodes_m[1] - sem.x_nodes_m[0]).min(sem.y_nodes_m[1] - sem.y_nodes_m[0]);
+            let sem_dt = 0.1 * gap / speeds.p_x_m_s.max(speeds.p_y_m_s);
+            let t3_dt = element_dt_bound(&model);
+            let steps = if quick { 20 } else { 200 };
+            let step_reps = if quick { 1 } else { 5 };
             for &t in &thread_counts {
                 let (sem_ns, t3_ns) = pool(t).install(|| {
                     let mut out = vec![0.0; n];
@@ -687,16 +708,27 @@ fn main() {
                     std::hint::black_box((&out, &out3));
                     (best * 1e9 / n as f64, best3 * 1e9 / u3.len() as f64)
                 });
+                let (sem_step, t3_step) = pool(t).install(|| {
+                    (
+                        kernel_time(&sem, sem_dt, steps, step_reps) * 1e9 / n as f64,
+                        kernel_time(&fem, t3_dt, steps, step_reps) * 1e9 / u3.len() as f64,
+                    )
+                });
                 println!(
-                    "  order {order}, {n} DOFs, {t} thread(s): SEM {sem_ns:6.2} ns/DOF, T3 ({} DOFs) {t3_ns:6.2} ns/DOF",
-                    u3.len()
+                    "  order {order}, {n} DOFs, {t} thread(s): K u SEM {sem_ns:6.2} ns/DOF, T3 ({} DOFs) {t3_ns:6.2}; explicit step SEM {sem_step:6.2} ns/DOF/step, T3 {t3_step:6.2} (x{:.2})",
+                    u3.len(),
+                    sem_step / t3_step
                 );
                 sem_rows.push(SemRow {
                     order,
                     dofs: n,
+                    t3_dofs: u3.len(),
                     threads: t,
                     best_ns_per_dof: sem_ns,
                     t3_best_ns_per_dof: t3_ns,
+                    steps,
+                    step_ns_per_dof_step: sem_step,
+                    t3_step_ns_per_dof_step: t3_step,
                 });
             }
         }

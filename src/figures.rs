@@ -257,11 +257,19 @@ pub fn scattered_snapshot(
     )
 }
 
-/// Error against run time on log-log axes, one curve per integrator and step choice.
+/// Error against run time on log-log axes, one curve per discretisation (T3, or spectral
+/// elements of one order), integrator and step choice.
 pub fn work_precision(path: &Path, points: &[WorkPrecisionPoint]) -> Result<()> {
     let mut groups: Vec<(String, Series)> = Vec::new();
     for p in points {
-        let label = format!("{} dt = {:.2} dt_crit", p.integrator, p.stability_ratio);
+        let method = match p.discretisation.as_str() {
+            "sem" => format!("SEM p = {}", p.order),
+            _ => "T3".to_string(),
+        };
+        let label = format!(
+            "{method} {} dt = {:.2} dt_crit",
+            p.integrator, p.stability_ratio
+        );
         let idx = match groups.iter().position(|g| g.0 == label) {
             Some(i) => i,
             None => {
@@ -284,7 +292,7 @@ pub fn work_precision(path: &Path, points: &[WorkPrecisionPoint]) -> Result<()> 
         x_scale: Scale::Log10,
         y_scale: Scale::Log10,
         ..axes(
-            "Work-precision: plane P wave vs exact solution",
+            "Work-precision: plane P wave vs exact solution (T3 and spectral elements)",
             "run time (s)",
             "relative L2 error",
         )

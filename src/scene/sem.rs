@@ -156,8 +156,8 @@ fn split(model: &mut SemModel, nodes: &mut Mesh, p: &CrackPlacement) -> Result<C
 }
 
 /// dt_crit from the Lanczos estimate of the largest eigenvalue of M^-1 K over the free DOFs
-/// (springs included, dashpots not: they do not enter M^-1 K), and the guaranteed element
-/// bound.
+/// (springs included, dashpots not: they do not enter M^-1 K), and the element bound
+/// ([`SemModel::element_eigenvalue_bound`]).
 fn stability(model: &SemModel) -> StabilityEstimate {
     let mut free = vec![true; model.dofs()];
     for &d in &model.fixed_dofs {
@@ -166,7 +166,7 @@ fn stability(model: &SemModel) -> StabilityEstimate {
     let (lambda, iterations) = model.max_eigenvalue(&free);
     StabilityEstimate {
         dt_crit_s: 2.0 / lambda.sqrt(),
-        dt_element_bound_s: 0.0, // TODO-MERGE: element bound from assembled element matrices
+        dt_element_bound_s: 2.0 / model.element_eigenvalue_bound().sqrt(),
         iterations,
     }
 }
@@ -184,7 +184,25 @@ pub(super) fn run(
         Integrator::Explicit => {
             solve::run_central_difference_on(model, dt_crit_s, sources, receivers, config)
         }
-        Integrator::Newmark { .. } => Err(Error::invalid("integrator", "newmark", "TODO-MERGE")),
+        Integrator::Newmark { consistent_mass } => {
+            if consistent_mass {
+                return Err(Error::invalid(
+                    "integrator.consistent_mass",
+                    true,
+                    "spectral elements have the GLL (diagonal) mass only: set consistent_mass: false",
+                ));
+            }
+            if config.contact.is_some() && model.crack().is_some() {
+                return Err(Error::invalid(
+                    "integrator",
+                    "newmark",
+                    "contact is implemented for the explicit integrator only",
+                ));
+            }
+            let stiffness = model.assemble_stiffness();
+            let body = solve::NewmarkBody::sem(model, &stiffness)?;
+            solve::run_newmark_on(body, dt_crit_s, sources, receivers, config)
+        }
     }
 }
 

@@ -180,13 +180,13 @@ mod study_api {
         Ok(Arc::new(crate::study::work_precision(&spec).at(&ctx)?))
     }
 
-    /// The study's points as maps #{integrator, element_size_m, dt_s, stability_ratio, dofs, error, run_time_s, report}.
+    /// The study's points as maps #{discretisation, order, integrator, element_size_m, dt_s, stability_ratio, dofs, error, run_time_s, report}.
     #[rhai_fn(global, get = "points", pure, return_raw)]
     pub fn points(ctx: NativeCallContext, wp: &mut WorkPrecision) -> Res<Dynamic> {
         to_dynamic(&ctx, wp.as_ref())
     }
 
-    /// Writes the study as CSV: integrator, element size, dt, dt/dt_crit, DOFs, steps, error, run time, energy residual.
+    /// Writes the study as CSV: discretisation (t3 or sem), order, integrator, element size, dt, dt/dt_crit, DOFs, steps, error, run time, energy residual.
     #[rhai_fn(global, return_raw)]
     pub fn write_csv(ctx: NativeCallContext, wp: WorkPrecision, path: &str) -> Res<()> {
         let file = HostContext::of(&ctx)?
@@ -200,6 +200,8 @@ mod study_api {
 /// One CSV row of a work-precision study; the field names are the column names.
 #[derive(Serialize)]
 struct WorkPrecisionRow<'a> {
+    discretisation: &'a str,
+    order: usize,
     integrator: &'a str,
     element_size_m: RoundTrip,
     dt_s: RoundTrip,
@@ -215,6 +217,8 @@ impl<'a> WorkPrecisionRow<'a> {
     /// The row of point `p`.
     fn of(p: &'a WorkPrecisionPoint) -> Self {
         WorkPrecisionRow {
+            discretisation: &p.discretisation,
+            order: p.order,
             integrator: &p.integrator,
             element_size_m: RoundTrip(p.element_size_m),
             dt_s: RoundTrip(p.dt_s),

@@ -17,6 +17,7 @@
 //! grid, and the element row below the line reads and writes the duplicates, the row above
 //! the originals. Viscous springs ([`SemModel::viscous_springs`]) add a diagonal stiffness.
 
+mod assembled;
 pub mod gll;
 mod layered;
 

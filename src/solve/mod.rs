@@ -6,7 +6,8 @@
 //! spectral elements), a [`Stepper`] over it ([`CentralDifference`], generic over the
 //! contact law, or [`Newmark`]), [`Observer`]s ([`observers`]) and the one loop [`drive`].
 //! [`run`] assembles the standard run of a T3 model from them, and
-//! [`run_central_difference_on`] the same for any discretisation.
+//! [`run_central_difference_on`] the same for any discretisation, [`run_newmark_on`] for any
+//! assembled body ([`NewmarkBody`]: T3 or spectral elements).
 
 pub mod discretisation;
 pub mod explicit;
@@ -27,7 +28,7 @@ use crate::signal::Signal;
 pub use discretisation::{Discretisation, Fem};
 pub use explicit::{CentralDifference, Coefficients};
 pub use ledger::{EnergyLedger, Flows};
-pub use newmark::Newmark;
+pub use newmark::{Newmark, NewmarkBody};
 use observers::{CrackRecorder, LedgerMonitor, ReceiverTraces, SnapshotSink};
 use serde::{Deserialize, Serialize};
 pub use stability::StabilityEstimate;
@@ -666,45 +667,89 @@ fn run_newmark(
     let stab = config
         .stability
         .unwrap_or_else(|| stability::estimate(model));
-    let dt = config
-        .dt_s
-        .ok_or_else(|| Error::invalid("dt_s", "none", "Newmark needs an explicit time step"))?;
     let node_x = |node: usize| model.mesh.nodes[node][0];
-    let body = BodyShape {
+    let shape = BodyShape {
         dofs: model.dofs(),
         crack: model.crack.as_ref(),
         node_x: &node_x,
     };
-    let steps = run_steps(body, sources.len(), receivers.len(), config, dt)?;
+    let body = NewmarkBody::t3(model, consistent_mass)?;
+    newmark(
+        body,
+        shape,
+        stab.dt_crit_s,
+        (sources, receivers),
+        config,
+        setup,
+    )
+}
+
+/// Newmark average acceleration on any assembled body (spectral elements with
+/// [`crate::sem::SemModel::assemble_stiffness`], or a T3 model) without a crack, with the
+/// standard observers: the same loop, checks and report as [`run`] with
+/// [`Integrator::Newmark`]. `config.dt_s` is required; `dt_crit_s` is the body's explicit
+/// critical step, for the report's stability ratio; `config.integrator` and
+/// `config.stability` are not used (the mass is the body's).
+pub fn run_newmark_on(
+    body: NewmarkBody<'_>,
+    dt_crit_s: f64,
+    sources: &[Source],
+    receivers: &[Receiver],
+    config: &RunConfig,
+) -> Result<RunOutput> {
+    validate(body.dofs(), sources, receivers, config)?;
+    let shape = BodyShape {
+        dofs: body.dofs(),
+        crack: None,
+        node_x: &|_| 0.0,
+    };
+    newmark(
+        body,
+        shape,
+        dt_crit_s,
+        (sources, receivers),
+        config,
+        Instant::now(),
+    )
+}
+
+/// The Newmark run: steps, the stepper (one factorisation) and its observers.
+fn newmark(
+    body: NewmarkBody<'_>,
+    shape: BodyShape<'_>,
+    dt_crit_s: f64,
+    (sources, receivers): (&[Source], &[Receiver]),
+    config: &RunConfig,
+    setup: Instant,
+) -> Result<RunOutput> {
+    let dt = config
+        .dt_s
+        .ok_or_else(|| Error::invalid("dt_s", "none", "Newmark needs an explicit time step"))?;
+    let steps = run_steps(shape, sources.len(), receivers.len(), config, dt)?;
     let forced = SampledSources::new(sources, dt, steps + 1)?;
+    let integrator = format!("Newmark average acceleration ({} mass)", body.mass.name());
     let mut stepper = Newmark::new(
-        model,
+        body,
         dt,
-        consistent_mass,
         forced,
         config.initial_displacement.as_deref(),
         config.initial_velocity.as_deref(),
     )?;
     let mut observers =
-        StandardObservers::new(body, receivers, config, steps, &mut stepper, stab.dt_crit_s);
+        StandardObservers::new(shape, receivers, config, steps, &mut stepper, dt_crit_s);
     let setup_time_s = setup.elapsed().as_secs_f64();
     let clock = Instant::now();
     observers.drive(&mut stepper, steps, config.progress)?;
     let times = (setup_time_s, clock.elapsed().as_secs_f64());
-    let mass = if consistent_mass {
-        "consistent"
-    } else {
-        "lumped"
-    };
     let report = report(
-        format!("Newmark average acceleration ({mass} mass)"),
+        integrator,
         &observers.ledger.ledger,
         times,
         steps,
-        model.dofs(),
-        (dt, stab.dt_crit_s),
+        shape.dofs,
+        (dt, dt_crit_s),
     );
-    Ok(observers.output(body, receivers, report, None))
+    Ok(observers.output(shape, receivers, report, None))
 }
 
 /// Nodal weights of a segment: each edge between consecutive `nodes` gives half its length

@@ -10,6 +10,7 @@ use super::stepper::{EnergySample, Fields, Stepper, Velocity};
 use super::SampledSources;
 use crate::error::{Error, Result};
 use crate::fem::{assemble_consistent_mass, BlockCsr, Model};
+use crate::sem::SemModel;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
@@ -17,12 +18,14 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMat, Triplet};
 
 /// The mass operator: lumped (diagonal) or consistent (sparse).
-enum Mass {
-    Lumped(Vec<f64>),
+pub enum Mass<'a> {
+    /// Diagonal mass per DOF.
+    Lumped(&'a [f64]),
+    /// The consistent mass matrix (T3).
     Consistent(BlockCsr),
 }
 
-impl Mass {
+impl Mass<'_> {
     fn mul(&self, x: &[f64], out: &mut [f64]) {
         match self {
             Mass::Lumped(m) => out
@@ -38,6 +41,92 @@ impl Mass {
             Mass::Lumped(m) => m.iter().enumerate().for_each(|(i, &v)| f(i, i, v)),
             Mass::Consistent(m) => m.for_each_entry(f),
         }
+    }
+
+    /// "lumped" or "consistent", for reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Mass::Lumped(_) => "lumped",
+            Mass::Consistent(_) => "consistent",
+        }
+    }
+}
+
+/// What the Newmark scheme needs of a body M u'' + C u' + K u = f: the assembled stiffness,
+/// the mass, the dashpots (diagonal C) and the DOFs held at zero. Built from a T3 model
+/// ([`NewmarkBody::t3`]) or from spectral elements and their assembled stiffness
+/// ([`NewmarkBody::sem`]).
+pub struct NewmarkBody<'a> {
+    /// The assembled stiffness K.
+    pub stiffness: &'a BlockCsr,
+    /// The mass M.
+    pub mass: Mass<'a>,
+    /// (DOF, c) of every dashpot.
+    pub dashpots: &'a [(usize, f64)],
+    /// DOFs held at zero.
+    pub fixed_dofs: &'a [usize],
+}
+
+impl<'a> NewmarkBody<'a> {
+    /// A T3 model with its lumped or (assembled here) consistent mass.
+    pub fn t3(model: &'a Model, consistent_mass: bool) -> Result<Self> {
+        let mass = if consistent_mass {
+            Mass::Consistent(assemble_consistent_mass(&model.mesh, &model.materials)?)
+        } else {
+            Mass::Lumped(&model.lumped_mass)
+        };
+        Ok(NewmarkBody {
+            stiffness: &model.stiffness,
+            mass,
+            dashpots: &model.dashpots,
+            fixed_dofs: &model.fixed_dofs,
+        })
+    }
+
+    /// Spectral elements with their diagonal GLL mass, their dashpots and fixed DOFs, and
+    /// `stiffness` from [`SemModel::assemble_stiffness`] (refused when its size differs).
+    pub fn sem(model: &'a SemModel, stiffness: &'a BlockCsr) -> Result<Self> {
+        if 2 * stiffness.nodes() != model.dofs() {
+            return Err(Error::invalid(
+                "stiffness",
+                format!("{} DOFs", 2 * stiffness.nodes()),
+                format!("is not this model's ({} DOFs)", model.dofs()),
+            ));
+        }
+        Ok(NewmarkBody {
+            stiffness,
+            mass: Mass::Lumped(&model.lumped_mass),
+            dashpots: &model.dashpots,
+            fixed_dofs: &model.fixed_dofs,
+        })
+    }
+
+    /// Number of DOFs.
+    pub fn dofs(&self) -> usize {
+        2 * self.stiffness.nodes()
+    }
+
+    /// Refuses a mass, a dashpot or a fixed DOF that does not fit the stiffness (the fields
+    /// are public, so a body can be put together by hand).
+    fn check(&self) -> Result<()> {
+        let n = self.dofs();
+        let mass_dofs = match &self.mass {
+            Mass::Lumped(m) => m.len(),
+            Mass::Consistent(m) => 2 * m.nodes(),
+        };
+        if mass_dofs != n {
+            return Err(Error::invalid(
+                "mass",
+                format!("{mass_dofs} DOFs"),
+                format!("needs the stiffness's {n}"),
+            ));
+        }
+        let dofs = self.dashpots.iter().map(|d| ("dashpots", d.0));
+        let fixed = self.fixed_dofs.iter().map(|&d| ("fixed_dofs", d));
+        if let Some((field, d)) = dofs.chain(fixed).find(|&(_, d)| d >= n) {
+            return Err(Error::invalid(field, d, format!("DOF must be < {n}")));
+        }
+        Ok(())
     }
 }
 
@@ -117,11 +206,13 @@ fn factor(
     })
 }
 
-/// Newmark average acceleration on a T3 model (assembled K, lumped or consistent mass): the
-/// state (u, v, a), the factored effective matrix and every buffer allocated once.
+/// Newmark average acceleration on an assembled body ([`NewmarkBody`]: T3 with lumped or
+/// consistent mass, or spectral elements): the state (u, v, a), the factored effective matrix
+/// and every buffer allocated once.
 pub struct Newmark<'a> {
-    model: &'a Model,
-    mass: Mass,
+    stiffness: &'a BlockCsr,
+    mass: Mass<'a>,
+    dashpots: &'a [(usize, f64)],
     effective: Factor,
     fixed: Vec<bool>,
     dt: f64,
@@ -138,47 +229,57 @@ pub struct Newmark<'a> {
 }
 
 impl<'a> Newmark<'a> {
-    /// The scheme at step `dt` with lumped or consistent mass, from u_0 and v_0 (zero if
-    /// `None`; fixed DOFs start at zero): factors S once and solves M a_0 = f_0 - K u_0 - C v_0.
-    /// `sources` must hold one more sample than the run has steps (f_{n+1} enters step n).
+    /// The scheme at step `dt` on `body`, from u_0 and v_0 (zero if `None`; fixed DOFs start
+    /// at zero): factors S once and solves M a_0 = f_0 - K u_0 - C v_0. `sources` must hold
+    /// one more sample than the run has steps (f_{n+1} enters step n).
     pub fn new(
-        model: &'a Model,
+        body: NewmarkBody<'a>,
         dt: f64,
-        consistent_mass: bool,
         sources: SampledSources<'a>,
         initial_displacement: Option<&[f64]>,
         initial_velocity: Option<&[f64]>,
     ) -> Result<Self> {
-        let n = model.dofs();
+        body.check()?;
+        let n = body.dofs();
         let mut fixed = vec![false; n];
-        for &d in &model.fixed_dofs {
+        for &d in body.fixed_dofs {
             fixed[d] = true;
         }
-        let mass = if consistent_mass {
-            Mass::Consistent(assemble_consistent_mass(&model.mesh, &model.materials)?)
-        } else {
-            Mass::Lumped(model.lumped_mass.clone())
-        };
+        let NewmarkBody {
+            stiffness,
+            mass,
+            dashpots,
+            ..
+        } = body;
         let effective = factor(n, &fixed, |add| {
-            model.stiffness.for_each_entry(&mut *add);
+            stiffness.for_each_entry(&mut *add);
             mass.for_each_entry(|i, j, v| add(i, j, 4.0 / (dt * dt) * v));
-            for &(d, c) in &model.dashpots {
+            for &(d, c) in dashpots {
                 add(d, d, 2.0 / dt * c);
             }
         })?;
-        let start = |x: Option<&[f64]>| {
+        let start = |field: &str, x: Option<&[f64]>| {
             let mut x = x.map_or_else(|| vec![0.0; n], <[f64]>::to_vec);
+            if x.len() != n {
+                return Err(Error::invalid(
+                    field,
+                    format!("{} values", x.len()),
+                    format!("needs {n}"),
+                ));
+            }
             for (d, &f) in fixed.iter().enumerate() {
                 if f {
                     x[d] = 0.0;
                 }
             }
-            x
+            Ok(x)
         };
-        let (u, v) = (start(initial_displacement), start(initial_velocity));
+        let u = start("initial_displacement", initial_displacement)?;
+        let v = start("initial_velocity", initial_velocity)?;
         let mut stepper = Newmark {
-            model,
+            stiffness,
             mass,
+            dashpots,
             effective,
             fixed,
             dt,
@@ -199,8 +300,8 @@ impl<'a> Newmark<'a> {
     /// a_0 = M^-1 (f_0 - K u_0 - C v_0).
     fn initial_acceleration(&mut self) -> Result<Vec<f64>> {
         let (n, work) = (self.u.len(), &mut self.work);
-        self.model.stiffness.mul(&self.u, work);
-        for &(d, c) in &self.model.dashpots {
+        self.stiffness.mul(&self.u, work);
+        for &(d, c) in self.dashpots {
             work[d] += c * self.v[d];
         }
         work.iter_mut().for_each(|w| *w = -*w);
@@ -209,7 +310,7 @@ impl<'a> Newmark<'a> {
         Ok(match &self.mass {
             Mass::Lumped(m) => work
                 .iter()
-                .zip(m)
+                .zip(m.iter())
                 .enumerate()
                 .map(|(d, (f, m))| if fixed[d] { 0.0 } else { f / m })
                 .collect(),
@@ -244,7 +345,7 @@ impl Stepper for Newmark<'_> {
         self.mass.mul(u_next, &mut self.work);
         let col = self.rhs.col_as_slice_mut(0);
         col.copy_from_slice(&self.work);
-        for &(d, c) in &self.model.dashpots {
+        for &(d, c) in self.dashpots {
             col[d] += c * (2.0 / dt * u[d] + v[d]);
         }
         self.sources.add_forces(step + 1, col);
@@ -268,7 +369,7 @@ impl Stepper for Newmark<'_> {
             v_next[d] = v[d] + 0.5 * dt * (a[d] + a_next);
             a[d] = a_next;
         }
-        for &(d, c) in &self.model.dashpots {
+        for &(d, c) in self.dashpots {
             self.flows.dashpot_loss += c * (u_next[d] - u[d]) * 0.5 * (v[d] + v_next[d]);
         }
         Ok(())
@@ -293,7 +394,7 @@ impl Stepper for Newmark<'_> {
         let (u, v, work) = (&self.u, &self.v, &mut self.work);
         self.mass.mul(v, work);
         let kinetic = 0.5 * v.iter().zip(work.iter()).map(|(a, b)| a * b).sum::<f64>();
-        self.model.stiffness.mul(u, work);
+        self.stiffness.mul(u, work);
         let strain = 0.5 * u.iter().zip(work.iter()).map(|(a, b)| a * b).sum::<f64>();
         EnergySample {
             time_s: step as f64 * self.dt,
