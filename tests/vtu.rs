@@ -186,14 +186,25 @@ fn pvd_lists_three_snapshots_with_their_times() {
 
 /// `scene::write_pvd` from a script: one VTU per snapshot of a run beside the collection,
 /// listed with the snapshots' times, each with the scene's point and cell counts.
+/// A run's snapshots as a ParaView series, from a T3 scene and from a spectral-element one
+/// (whose VTU cells are its GLL cells, each as two triangles, on its nodes).
 #[test]
 fn script_writes_a_snapshot_series() {
+    for kind in ["t3", "sem"] {
+        snapshot_series(kind);
+    }
+}
+
+fn snapshot_series(kind: &str) {
     use trnews::script::{Host, HostOptions};
-    let dir = TempDir::new("pvd-script");
+    let dir = TempDir::new(&format!("pvd-script-{kind}"));
     let script = dir.path().join("series.rhai");
-    let text = "let s = scene::preset(\"smoke\", #{});\n\
-                let run = s.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{duration_s: 20.0 * s.dt, snapshot_every: 5});\n\
-                scene::write_pvd(\"anim/field.pvd\", s, run);\n";
+    let text = format!(
+        "let s = scene::preset(\"smoke\", \"{kind}\", #{{}});\n\
+         let run = s.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{{duration_s: 20.0 * s.dt, snapshot_every: 5}});\n\
+         scene::write_pvd(\"anim/field.pvd\", s, run);\n\
+         io::write_json(\"nodes.json\", s.summary().nodes);\n"
+    );
     std::fs::write(&script, text).unwrap();
     let out = dir.path().join("out");
     let host = Host::new(HostOptions {
@@ -222,7 +233,14 @@ fn script_writes_a_snapshot_series() {
             .unwrap()
             .into_loaded_piece_data(None)
             .unwrap();
-        assert!(piece.num_points() > 0 && piece.cells.num_cells() > 0);
+        let nodes: usize = std::fs::read_to_string(out.join("nodes.json"))
+            .unwrap()
+            .trim()
+            .parse()
+            .unwrap();
+        assert!(piece.num_points() == nodes && piece.cells.num_cells() > 0, "{kind}");
+        // VTK vectors have three components (u_z = 0)
+        assert_eq!(array(&piece.data.point, "displacement").len(), 3 * nodes);
         assert_eq!(
             array(&piece.data.cell, "layer").len(),
             piece.cells.num_cells()
