@@ -65,6 +65,15 @@ impl InputError {
     }
 }
 
+/// `rel` as a path to resolve beneath a root: relative and without `..` (None otherwise).
+fn beneath(rel: &str) -> Option<&Path> {
+    let p = Path::new(rel);
+    let plain = p
+        .components()
+        .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
+    (!p.has_root() && plain).then_some(p)
+}
+
 /// An input directory opened once; every read is resolved beneath it.
 #[derive(Clone, Debug)]
 pub struct InputRoot {
@@ -155,21 +164,13 @@ impl InputRoot {
     /// True when `rel` (relative, without `..`) is a directory beneath the root; false when it
     /// is missing, not a directory, or leads out of the root.
     pub fn is_dir(&self, rel: &str) -> bool {
-        let p = Path::new(rel);
-        !p.has_root()
-            && p.components()
-                .all(|c| matches!(c, Component::Normal(_) | Component::CurDir))
-            && self.dir.is_dir(p)
+        beneath(rel).is_some_and(|p| self.dir.is_dir(p))
     }
 
     /// True when `rel` (relative, without `..`) is a regular file beneath the root; false when
     /// it is missing, not a file, or leads out of the root.
     pub fn is_file(&self, rel: &str) -> bool {
-        let p = Path::new(rel);
-        !p.has_root()
-            && p.components()
-                .all(|c| matches!(c, Component::Normal(_) | Component::CurDir))
-            && self.dir.is_file(p)
+        beneath(rel).is_some_and(|p| self.dir.is_file(p))
     }
 
     /// True when the longest existing prefix of `rel` resolves outside the root (wording only:

@@ -102,6 +102,22 @@ fn paths_outside_the_data_directory_are_refused() {
             "{path}: {e}"
         );
     }
+    // io::exists answers inside the data directory only: true for a file (through a link that
+    // stays inside), false for a directory, a missing file and every path leading out
+    let outside = format!(
+        "for p in [\"../secret/s.json\", {abs:?}, \"file_out.json\", \"dir_out/s.json\", \
+         \"inner/far.json\"] {{ assert(!io::exists(p), p); }}"
+    );
+    h.run_str(
+        "t.rhai",
+        &(r#"
+        assert(io::exists("ok.json") && io::exists("inner/up.json"), "inside");
+        assert(!io::exists("inner") && !io::exists("nope.json"), "not files");
+        "#
+        .to_string()
+            + &outside),
+    )
+    .expect("exists stays inside the data directory");
     // a link swapped to point out after the host opened the root is refused at use
     std::fs::remove_file(data.join("inner/up.json")).expect("unlink");
     std::os::unix::fs::symlink(secret.join("s.json"), data.join("inner/up.json")).expect("relink");
