@@ -110,12 +110,13 @@ fn paths_outside_the_data_directory_are_refused() {
     );
     h.run_str(
         "t.rhai",
-        &(r#"
-        assert(io::exists("ok.json") && io::exists("inner/up.json"), "inside");
-        assert(!io::exists("inner") && !io::exists("nope.json"), "not files");
-        "#
-        .to_string()
-            + &outside),
+        &format!(
+            "{}{outside}",
+            r#"
+            assert(io::exists("ok.json") && io::exists("inner/up.json"), "inside");
+            assert(!io::exists("inner") && !io::exists("nope.json"), "not files");
+            "#
+        ),
     )
     .expect("exists stays inside the data directory");
     // a link swapped to point out after the host opened the root is refused at use
