@@ -70,6 +70,9 @@ pub struct SemModel {
     derivative_y_t: Vec<Vec<f64>>,
     /// First node row of each element row.
     first_line: Vec<usize>,
+    /// Half widths jx = h_x / 2 of the element columns (dx/dxi), by lane group, the padding
+    /// lanes past the last column 1.
+    half_width: Vec<Lanes>,
 }
 
 /// The split node line of a crack: the element row below it reads and writes the duplicates
@@ -99,22 +102,70 @@ impl Split {
     }
 }
 
+/// Element columns per lane group of the row kernel: the elements of an element row are
+/// processed `LANES` at a time, every array operation running across them (f64 SIMD lanes).
+const LANES: usize = 8;
+
+/// One value per element of a lane group.
+type Lanes = [f64; LANES];
+
 /// Scratch of [`SemModel::stiffness_times`], allocated once per model size: per element row,
-/// the forces on its node rows and the weighted stresses of one element.
+/// the forces on its node lines and one lane group's fields at its GLL points; the springs
+/// sorted by node line.
 #[derive(Clone, Debug)]
 pub struct SemWorkspace {
     rows: Vec<RowWork>,
+    springs: SpringLines,
 }
 
 #[derive(Clone, Debug)]
 struct RowWork {
     /// Forces on the row's node lines, `(order_y + 1) * nx * 2`.
     force: Vec<f64>,
-    /// One element's displacements at its GLL points.
-    ux: Vec<f64>,
-    uy: Vec<f64>,
-    /// Weighted stresses W sigma_xx, W sigma_yy, W sigma_xy at the element's GLL points.
-    stress: [Vec<f64>; 3],
+    /// Displacements u_x, u_y of a lane group's elements at their GLL points, `[b * N + a]`.
+    u: [Vec<Lanes>; 2],
+    /// Weighted stresses W sigma_xx, W sigma_yy, W sigma_xy at the same points.
+    stress: [Vec<Lanes>; 3],
+}
+
+/// The model's springs sorted by node line (stably: the springs of one DOF keep their order),
+/// the crack's duplicates last, with the list they were sorted from (rebuilt if it changes).
+#[derive(Clone, Debug, Default)]
+struct SpringLines {
+    springs: Vec<(usize, f64)>,
+    sorted: Vec<(usize, f64)>,
+    /// `sorted[start[j]..start[j + 1]]` are the springs of node line j.
+    start: Vec<usize>,
+}
+
+impl SpringLines {
+    fn new(model: &SemModel) -> SpringLines {
+        let (nx, lines) = (model.nx(), model.y_nodes_m.len());
+        let line = |d: usize| (d / 2 / nx).min(lines);
+        let mut sorted = model.springs.clone();
+        sorted.sort_by_key(|&(d, _)| line(d));
+        let start = (0..=lines + 1)
+            .map(|j| sorted.partition_point(|&(d, _)| line(d) < j))
+            .collect();
+        SpringLines {
+            springs: model.springs.clone(),
+            sorted,
+            start,
+        }
+    }
+
+    /// The springs of node line `j` (the duplicates: one past the last line).
+    fn line(&self, j: usize) -> &[(usize, f64)] {
+        &self.sorted[self.start[j]..self.start[j + 1]]
+    }
+}
+
+/// The central-difference predictor applied to K u in the same pass:
+/// u_next = 2 u - u_prev - a .* (K u), a = dt^2 / m.
+#[derive(Clone, Copy)]
+struct Predictor<'a> {
+    a: &'a [f64],
+    u_prev: &'a [f64],
 }
 
 impl SemModel {
@@ -165,6 +216,7 @@ impl SemModel {
         }
         let (derivative_x, derivative_x_t) = flat_derivative(&gll_x);
         let (derivative_y, derivative_y_t) = gll_y.iter().map(flat_derivative).unzip();
+        let half_width = lane_groups(columns_m.windows(2).map(|w| 0.5 * (w[1] - w[0])));
         let mut model = SemModel {
             columns_m,
             rows_m,
@@ -184,6 +236,7 @@ impl SemModel {
             derivative_y,
             derivative_y_t,
             first_line,
+            half_width,
         };
         model.lumped_mass = model.assemble_mass();
         Ok(model)
@@ -392,15 +445,18 @@ impl SemModel {
             .iter()
             .map(|g| {
                 let points = (px + 1) * (g.order() + 1);
+                let lanes = || vec![[0.0; LANES]; points];
                 RowWork {
                     force: vec![0.0; (g.order() + 1) * self.nx() * 2],
-                    ux: vec![0.0; points],
-                    uy: vec![0.0; points],
-                    stress: [vec![0.0; points], vec![0.0; points], vec![0.0; points]],
+                    u: [lanes(), lanes()],
+                    stress: [lanes(), lanes(), lanes()],
                 }
             })
             .collect();
-        SemWorkspace { rows }
+        SemWorkspace {
+            rows,
+            springs: SpringLines::new(self),
+        }
     }
 
     /// The diagonal mass: rho w_a w_b (h_x / 2) (h_y / 2) at each element's GLL point (a, b),
@@ -429,47 +485,78 @@ impl SemModel {
     /// `out = K u`, the internal forces f_k = sum_e int B_k^T C B u dA with GLL quadrature,
     /// by sum factorisation: gradients at the GLL points from the 1-D derivative matrices
     /// (O(p^3) per element), stresses sigma = C eps, then the transposed derivatives.
-    /// Element rows run in parallel into their own force lines; node rows then gather from
-    /// the one or two element rows that hold them, in a fixed order (bit-identical for any
-    /// thread count). On a crack line the split columns take the row above only, and their
-    /// duplicates the row below; then the springs add k u on their DOFs, in order.
-    /// Allocates nothing.
+    /// Element rows run in parallel into their own force lines, their elements a lane group
+    /// at a time ([`SemModel::row_forces`]); node lines then gather from the one or two
+    /// element rows that hold them, in a fixed order (bit-identical for any thread count). On
+    /// a crack line the split columns take the row above only, and their duplicates the row
+    /// below; then the springs add k u on their DOFs, in order. Allocates nothing (unless the
+    /// springs changed since the workspace was made).
     pub fn stiffness_times(&self, u: &[f64], out: &mut [f64], work: &mut SemWorkspace) {
+        self.apply(u, out, None, work);
+    }
+
+    /// The central-difference predictor u_next = 2 u - u_prev - a .* (K u) (report eq 69,
+    /// a = dt^2 / m) fused into [`SemModel::stiffness_times`]: each node line of K u is
+    /// finished into u_next as it is gathered, one pass over the vectors. Bit-identical to
+    /// forming K u first and combining after.
+    pub fn explicit_update(
+        &self,
+        a: &[f64],
+        u_prev: &[f64],
+        u: &[f64],
+        u_next: &mut [f64],
+        work: &mut SemWorkspace,
+    ) {
+        assert_eq!(a.len(), self.dofs());
+        assert_eq!(u_prev.len(), self.dofs());
+        self.apply(u, u_next, Some(Predictor { a, u_prev }), work);
+    }
+
+    /// K u into `out`, through the `predictor` if one is given.
+    fn apply(
+        &self,
+        u: &[f64],
+        out: &mut [f64],
+        predictor: Option<Predictor>,
+        work: &mut SemWorkspace,
+    ) {
         assert_eq!(u.len(), self.dofs());
         assert_eq!(out.len(), self.dofs());
-        work.rows
-            .par_iter_mut()
+        if work.springs.springs != self.springs {
+            work.springs = SpringLines::new(self);
+        }
+        let SemWorkspace { rows, springs } = work;
+        rows.par_iter_mut()
             .enumerate()
             .for_each(|(r, row)| self.row_forces(r, u, row));
+        // springs, then the predictor, on a line of K u starting at DOF `first`
+        let finish = |first: usize, line: &mut [f64], springs: &[(usize, f64)]| {
+            for &(d, k) in springs {
+                line[d - first] += k * u[d];
+            }
+            if let Some(Predictor { a, u_prev }) = predictor {
+                let dofs = first..first + line.len();
+                let old = a[dofs.clone()].iter().zip(&u_prev[dofs.clone()]);
+                for ((ku, (&ai, &pi)), &ui) in line.iter_mut().zip(old).zip(&u[dofs]) {
+                    *ku = 2.0 * ui - pi - ai * *ku;
+                }
+            }
+        };
         let nx = self.nx();
-        let rows = &work.rows;
         let (grid, faces) = out.split_at_mut(2 * self.grid_nodes());
         grid.par_chunks_mut(2 * nx)
             .enumerate()
             .for_each(|(j, line)| {
-                // the element row whose lines start at or below j, and its local line
-                let r = self.first_line.partition_point(|&f| f <= j) - 1;
-                let b = j - self.first_line[r];
-                let own = &rows[r].force[b * 2 * nx..(b + 1) * 2 * nx];
-                line.copy_from_slice(own);
-                if b == 0 && r > 0 {
-                    let below = self.gll_y[r - 1].order();
-                    let lower = &rows[r - 1].force[below * 2 * nx..(below + 1) * 2 * nx];
-                    match self.split.as_ref().filter(|s| s.line == j) {
-                        None => {
-                            for (o, l) in line.iter_mut().zip(lower) {
-                                *o += l;
-                            }
-                        }
-                        Some(s) => {
-                            let pairs = line.chunks_exact_mut(2).zip(lower.chunks_exact(2));
-                            for (i, (o, l)) in pairs.enumerate() {
-                                if s.duplicate(i).is_none() {
-                                    o[0] += l[0];
-                                    o[1] += l[1];
-                                }
-                            }
-                        }
+                let first = 2 * j * nx;
+                let crack_line = self.split.as_ref().is_some_and(|s| s.line == j);
+                match predictor {
+                    Some(p) if springs.line(j).is_empty() && !crack_line => {
+                        let (own, lower) = self.line_sources(j, rows, line.len());
+                        p.finish_sum(first, u, own, lower, line);
+                    }
+                    _ => {
+                        self.node_line_forces(j, rows, line);
+                        finish(first, line, springs.line(j));
                     }
                 }
             });
@@ -477,22 +564,69 @@ impl SemModel {
             let top = self.gll_y[s.row_below].order() * 2 * nx;
             let lower = &rows[s.row_below].force[top + 2 * s.first..top + 2 * (s.last + 1)];
             faces.copy_from_slice(lower);
-        }
-        for &(d, k) in &self.springs {
-            out[d] += k * u[d];
+            finish(
+                2 * s.first_duplicate,
+                faces,
+                springs.line(self.y_nodes_m.len()),
+            );
         }
     }
 
-    /// Forces of element row `r` on its own node lines. The element kernel is compiled for
-    /// each number of points along x (so its loops over them have fixed length); the order
-    /// was checked against [`MAX_ORDER`] when the model was built.
+    /// K u on node line `j` (without the springs): the forces of the element row whose
+    /// lines start at or below j, plus on its first line those of the row below (on a crack
+    /// line only where it is not split).
+    fn node_line_forces(&self, j: usize, rows: &[RowWork], line: &mut [f64]) {
+        let (own, lower) = self.line_sources(j, rows, line.len());
+        let Some(lower) = lower else {
+            line.copy_from_slice(own);
+            return;
+        };
+        match self.split.as_ref().filter(|s| s.line == j) {
+            None => {
+                for ((o, f), l) in line.iter_mut().zip(own).zip(lower) {
+                    *o = f + l;
+                }
+            }
+            Some(s) => {
+                line.copy_from_slice(own);
+                let pairs = line.chunks_exact_mut(2).zip(lower.chunks_exact(2));
+                for (i, (o, l)) in pairs.enumerate() {
+                    if s.duplicate(i).is_none() {
+                        o[0] += l[0];
+                        o[1] += l[1];
+                    }
+                }
+            }
+        }
+    }
+
+    /// The force lines (`n` values each) node line `j` sums: that of the element row whose
+    /// lines start at or below j, and on its first line the top line of the row below.
+    fn line_sources<'a>(
+        &self,
+        j: usize,
+        rows: &'a [RowWork],
+        n: usize,
+    ) -> (&'a [f64], Option<&'a [f64]>) {
+        let r = self.first_line.partition_point(|&f| f <= j) - 1;
+        let b = j - self.first_line[r];
+        let own = &rows[r].force[b * n..(b + 1) * n];
+        let lower = (b == 0 && r > 0).then(|| {
+            let below = self.gll_y[r - 1].order();
+            &rows[r - 1].force[below * n..(below + 1) * n]
+        });
+        (own, lower)
+    }
+
+    /// Forces of element row `r` on its own node lines. The row kernel is compiled for each
+    /// number of points along x (so its loops over them have fixed length; the order was
+    /// checked against [`MAX_ORDER`] when the model was built), and with AVX where the CPU
+    /// has it (wider lanes, the same operations: bit-identical results).
     fn row_forces(&self, r: usize, u: &[f64], row: &mut RowWork) {
-        row.force.fill(0.0);
-        let columns = 0..self.columns_m.len() - 1;
         macro_rules! by_points {
             ($($n:literal)*) => {
                 match self.gll_x.order() + 1 {
-                    $($n => columns.for_each(|c| self.element_forces::<$n>(r, c, u, row)),)*
+                    $($n => self.row_forces_dispatch::<$n>(r, u, row),)*
                     n => unreachable!("{n} GLL points along x: above MAX_ORDER + 1"),
                 }
             };
@@ -500,99 +634,230 @@ impl SemModel {
         by_points!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
     }
 
-    /// One element with `N` GLL points along x: displacements gathered, gradients at the GLL
-    /// points (d/dxi: sum_k D_x[a][k] u(k, b); d/deta: sum_k D_y[b][k] u(a, k)), weighted
-    /// stresses W C eps, then the transposed derivatives back to nodal forces,
-    /// f_x(a, b) = sum_k D_x[k][a] / jx W sxx(k, b) + sum_k D_y[k][b] / jy W sxy(a, k) (and f_y
-    /// with sxy, syy), added to the row's force lines. Every inner loop runs over the `N`
-    /// points of an element row, as a fixed-length multiply-add.
-    fn element_forces<const N: usize>(&self, r: usize, c: usize, u: &[f64], row: &mut RowWork) {
-        let nby = self.gll_y[r].order() + 1;
-        let dx = self.derivative_x.as_chunks::<N>().0;
-        let dxt = self.derivative_x_t.as_chunks::<N>().0;
-        let (dy, dyt) = (&self.derivative_y[r], &self.derivative_y_t[r]);
-        let wy = &self.gll_y[r].weights;
-        let nx = self.nx();
-        let jx = 0.5 * (self.columns_m[c + 1] - self.columns_m[c]);
-        let jy = 0.5 * (self.rows_m[r + 1] - self.rows_m[r]);
-        let cm = &self.materials[self.row_material[r]].stiffness_pa;
-        let (i0, j0) = (c * (N - 1), self.first_line[r]);
+    fn row_forces_dispatch<const N: usize>(&self, r: usize, u: &[f64], row: &mut RowWork) {
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above), the only requirement
+            // of this target_feature function.
+            return unsafe { self.row_forces_avx512::<N>(r, u, row) };
+        }
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        if std::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU supports AVX (checked just above), the only requirement of
+            // this target_feature function.
+            return unsafe { self.row_forces_avx::<N>(r, u, row) };
+        }
+        self.row_kernel::<N>(r, u, row);
+    }
+
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    #[target_feature(enable = "avx512f")]
+    fn row_forces_avx512<const N: usize>(&self, r: usize, u: &[f64], row: &mut RowWork) {
+        self.row_kernel::<N>(r, u, row);
+    }
+
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    #[target_feature(enable = "avx")]
+    fn row_forces_avx<const N: usize>(&self, r: usize, u: &[f64], row: &mut RowWork) {
+        self.row_kernel::<N>(r, u, row);
+    }
+
+    /// The elements of row `r`, `LANES` columns at a time: displacements gathered into
+    /// lanes ([`SemModel::gather`]), weighted stresses ([`SemModel::stresses`]), nodal
+    /// forces into the row's force lines ([`SemModel::scatter_forces`]). Every line of the
+    /// row's forces is written (no zeroing pass needed).
+    #[inline(always)]
+    fn row_kernel<const N: usize>(&self, r: usize, u: &[f64], row: &mut RowWork) {
+        let points = N * (self.gll_y[r].order() + 1);
         let RowWork {
             force,
-            ux,
-            uy,
+            u: [ux, uy],
             stress: [sxx, syy, sxy],
         } = row;
-        let ux = ux[..N * nby].as_chunks_mut::<N>().0;
-        let uy = uy[..N * nby].as_chunks_mut::<N>().0;
-        let sxx = sxx[..N * nby].as_chunks_mut::<N>().0;
-        let syy = syy[..N * nby].as_chunks_mut::<N>().0;
-        let sxy = sxy[..N * nby].as_chunks_mut::<N>().0;
+        let (ux, uy) = (&mut ux[..points], &mut uy[..points]);
+        let (sxx, syy, sxy) = (&mut sxx[..points], &mut syy[..points], &mut sxy[..points]);
+        for (g, jx) in self.half_width.iter().enumerate() {
+            self.gather::<N>(r, g * LANES, u, ux, uy);
+            self.stresses::<N>(r, jx, [ux, uy], [sxx, syy, sxy]);
+            self.scatter_forces::<N>(r, g * LANES, jx, [sxx, syy, sxy], force);
+        }
+    }
+
+    /// Displacements of the elements in columns `c0..c0 + LANES` of row `r` at their GLL
+    /// points, `[b * N + a][lane]`: zero in the padding lanes past the last column, and on
+    /// the top line of the row just below a crack the lower face's duplicates where split.
+    #[inline(always)]
+    fn gather<const N: usize>(
+        &self,
+        r: usize,
+        c0: usize,
+        u: &[f64],
+        ux: &mut [Lanes],
+        uy: &mut [Lanes],
+    ) {
+        let (nx, px, nby) = (self.nx(), N - 1, ux.len() / N);
+        let lanes = LANES.min(self.columns_m.len() - 1 - c0);
         for b in 0..nby {
-            let start = 2 * ((j0 + b) * nx + i0);
-            for (a, v) in u[start..start + 2 * N].chunks_exact(2).enumerate() {
-                ux[b][a] = v[0];
-                uy[b][a] = v[1];
+            let line = &u[2 * (self.first_line[r] + b) * nx..][..2 * nx];
+            let (ux, uy) = (&mut ux[b * N..][..N], &mut uy[b * N..][..N]);
+            if lanes == LANES {
+                // the group's node columns, a fixed length: no bounds checks in the loop
+                let group = &line[2 * c0 * px..][..2 * (LANES * px + 1)];
+                for a in 0..N {
+                    for l in 0..LANES {
+                        ux[a][l] = group[2 * (l * px + a)];
+                        uy[a][l] = group[2 * (l * px + a) + 1];
+                    }
+                }
+                continue;
+            }
+            for l in 0..LANES {
+                if l < lanes {
+                    let i0 = (c0 + l) * px;
+                    for (a, v) in line[2 * i0..2 * (i0 + N)].chunks_exact(2).enumerate() {
+                        ux[a][l] = v[0];
+                        uy[a][l] = v[1];
+                    }
+                } else {
+                    for a in 0..N {
+                        ux[a][l] = 0.0;
+                        uy[a][l] = 0.0;
+                    }
+                }
             }
         }
         if let Some(s) = self.split.as_ref().filter(|s| s.row_below == r) {
-            // the top line is the crack's lower face where it is split
-            for a in 0..N {
-                if let Some(d) = s.duplicate(i0 + a) {
-                    ux[nby - 1][a] = u[2 * d];
-                    uy[nby - 1][a] = u[2 * d + 1];
+            let top = (nby - 1) * N;
+            for l in 0..lanes {
+                for a in 0..N {
+                    if let Some(d) = s.duplicate((c0 + l) * px + a) {
+                        ux[top + a][l] = u[2 * d];
+                        uy[top + a][l] = u[2 * d + 1];
+                    }
                 }
             }
         }
+    }
+
+    /// Weighted stresses of a lane group at its GLL points (a, b): the gradients
+    /// d/dxi u(a, b) = sum_k D_x[a][k] u(k, b) and d/deta u(a, b) = sum_k D_y[b][k] u(a, k),
+    /// the strains eps = (u_x,xi / jx, u_y,eta / jy, u_x,eta / jy + u_y,xi / jx), and
+    /// W C eps with W = w_a w_b jx jy; every operation across the lanes (the group's
+    /// elements, each with its own jx).
+    #[inline(always)]
+    fn stresses<const N: usize>(
+        &self,
+        r: usize,
+        jx: &Lanes,
+        [ux, uy]: [&[Lanes]; 2],
+        [sxx, syy, sxy]: [&mut [Lanes]; 3],
+    ) {
+        let nby = ux.len() / N;
+        let dx = self.derivative_x.as_chunks::<N>().0;
+        let dy = &self.derivative_y[r];
+        let (wx, wy) = (&self.gll_x.weights, &self.gll_y[r].weights);
+        let jy = 0.5 * (self.rows_m[r + 1] - self.rows_m[r]);
+        // local copies: the stores below cannot alias them, so they stay in registers
+        let [c0, c1, c2] = self.materials[self.row_material[r]].stiffness_pa;
+        let jx = *jx;
+        let inv_jx = jx.map(|j| 1.0 / j);
+        let inv_jy = 1.0 / jy;
         for b in 0..nby {
-            let (mut dux_dxi, mut duy_dxi) = ([0.0; N], [0.0; N]);
-            for k in 0..N {
-                let (vx, vy, t) = (ux[b][k], uy[b][k], &dxt[k]);
-                for a in 0..N {
-                    dux_dxi[a] += t[a] * vx;
-                    duy_dxi[a] += t[a] * vy;
-                }
-            }
-            let (mut dux_deta, mut duy_deta) = ([0.0; N], [0.0; N]);
-            for k in 0..nby {
-                let d = dy[b * nby + k];
-                for a in 0..N {
-                    dux_deta[a] += d * ux[k][a];
-                    duy_deta[a] += d * uy[k][a];
-                }
-            }
+            let dy_b = &dy[b * nby..(b + 1) * nby];
             for a in 0..N {
-                let strain = [
-                    dux_dxi[a] / jx,
-                    duy_deta[a] / jy,
-                    dux_deta[a] / jy + duy_dxi[a] / jx,
-                ];
-                let w = self.gll_x.weights[a] * wy[b] * jx * jy;
-                sxx[b][a] = w * dot(&cm[0], &strain);
-                syy[b][a] = w * dot(&cm[1], &strain);
-                sxy[b][a] = w * dot(&cm[2], &strain);
+                let (ux_xi, uy_xi) = (
+                    contract(&dx[a], &ux[b * N..]),
+                    contract(&dx[a], &uy[b * N..]),
+                );
+                let (mut ux_eta, mut uy_eta) = ([0.0; LANES], [0.0; LANES]);
+                for (k, &d) in dy_b.iter().enumerate() {
+                    let (vx, vy) = (&ux[k * N + a], &uy[k * N + a]);
+                    for l in 0..LANES {
+                        ux_eta[l] += d * vx[l];
+                        uy_eta[l] += d * vy[l];
+                    }
+                }
+                let w = wx[a] * wy[b] * jy;
+                let p = b * N + a;
+                // one simple loop per quantity, each a few vector operations
+                let (mut e_xx, mut e_yy, mut g_xy, mut weight) =
+                    ([0.0; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
+                for l in 0..LANES {
+                    e_xx[l] = ux_xi[l] * inv_jx[l];
+                }
+                for l in 0..LANES {
+                    e_yy[l] = uy_eta[l] * inv_jy;
+                }
+                for l in 0..LANES {
+                    g_xy[l] = ux_eta[l] * inv_jy + uy_xi[l] * inv_jx[l];
+                }
+                for l in 0..LANES {
+                    weight[l] = w * jx[l];
+                }
+                for (s, c) in [(&mut sxx[p], c0), (&mut syy[p], c1), (&mut sxy[p], c2)] {
+                    for l in 0..LANES {
+                        s[l] = weight[l] * (c[0] * e_xx[l] + c[1] * e_yy[l] + c[2] * g_xy[l]);
+                    }
+                }
             }
         }
+    }
+
+    /// Nodal forces of a lane group (columns `c0..`) from its weighted stresses, by the
+    /// transposed derivatives:
+    /// f_x(a, b) = sum_k D_x[k][a] W sxx(k, b) / jx + sum_k D_y[k][b] W sxy(a, k) / jy,
+    /// f_y(a, b) = sum_k D_x[k][a] W sxy(k, b) / jx + sum_k D_y[k][b] W syy(a, k) / jy,
+    /// written into the row's force lines in column order, a node on a vertical element edge
+    /// taking the left element's force plus the right one's.
+    #[inline(always)]
+    fn scatter_forces<const N: usize>(
+        &self,
+        r: usize,
+        c0: usize,
+        jx: &Lanes,
+        [sxx, syy, sxy]: [&[Lanes]; 3],
+        force: &mut [f64],
+    ) {
+        let (nx, px, nby) = (self.nx(), N - 1, sxx.len() / N);
+        let dxt = self.derivative_x_t.as_chunks::<N>().0;
+        let dyt = &self.derivative_y_t[r];
+        let inv_jx = jx.map(|j| 1.0 / j);
+        let inv_jy = 2.0 / (self.rows_m[r + 1] - self.rows_m[r]);
+        let lanes = LANES.min(self.columns_m.len() - 1 - c0);
         for b in 0..nby {
-            let (mut fx, mut fy) = ([0.0; N], [0.0; N]);
-            for k in 0..N {
-                let (s1, s2, d) = (sxx[b][k] / jx, sxy[b][k] / jx, &dx[k]);
-                for a in 0..N {
-                    fx[a] += d[a] * s1;
-                    fy[a] += d[a] * s2;
+            let dyt_b = &dyt[b * nby..(b + 1) * nby];
+            let mut f = [[[0.0; LANES]; 2]; N];
+            for (a, fa) in f.iter_mut().enumerate() {
+                let (fx_xi, fy_xi) = (
+                    contract(&dxt[a], &sxx[b * N..]),
+                    contract(&dxt[a], &sxy[b * N..]),
+                );
+                let (mut fx_eta, mut fy_eta) = ([0.0; LANES], [0.0; LANES]);
+                for (k, &d) in dyt_b.iter().enumerate() {
+                    let (s1, s2) = (&sxy[k * N + a], &syy[k * N + a]);
+                    for l in 0..LANES {
+                        fx_eta[l] += d * s1[l];
+                        fy_eta[l] += d * s2[l];
+                    }
+                }
+                for l in 0..LANES {
+                    fa[0][l] = fx_xi[l] * inv_jx[l] + fx_eta[l] * inv_jy;
+                    fa[1][l] = fy_xi[l] * inv_jx[l] + fy_eta[l] * inv_jy;
                 }
             }
-            for k in 0..nby {
-                let d = dyt[b * nby + k] / jy;
-                for a in 0..N {
-                    fx[a] += d * sxy[k][a];
-                    fy[a] += d * syy[k][a];
-                }
+            let line = &mut force[2 * b * nx..2 * (b + 1) * nx];
+            if lanes == LANES {
+                scatter_group::<N>(&f, &mut line[2 * c0 * px..][..2 * (LANES * px + 1)], c0 > 0);
+                continue;
             }
-            let start = 2 * (b * nx + i0);
-            for (a, f) in force[start..start + 2 * N].chunks_exact_mut(2).enumerate() {
-                f[0] += fx[a];
-                f[1] += fy[a];
+            for l in 0..lanes {
+                let c = c0 + l;
+                let nodes = line[2 * c * px..2 * (c * px + N)].as_chunks_mut::<2>().0;
+                let left = if c > 0 { nodes[0] } else { [0.0; 2] };
+                for (node, fa) in nodes.iter_mut().zip(&f) {
+                    *node = [fa[0][l], fa[1][l]];
+                }
+                nodes[0] = [left[0] + f[0][0][l], left[1] + f[0][1][l]];
             }
         }
     }
@@ -746,8 +1011,86 @@ fn nearest(values: &[f64], v: f64) -> f64 {
         .unwrap_or(f64::NAN)
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+/// sum_k d[k] v[k] across the lanes, the first `N` entries of `v`.
+#[inline(always)]
+fn contract<const N: usize>(d: &[f64; N], v: &[Lanes]) -> Lanes {
+    let mut sum = [0.0; LANES];
+    for (&dk, vk) in d.iter().zip(&v[..N]) {
+        for l in 0..LANES {
+            sum[l] += dk * vk[l];
+        }
+    }
+    sum
+}
+
+/// The forces `f[a][component][lane]` of a full lane group into its node columns `group`
+/// (LANES elements of N - 1 columns, and the last one's right edge): the interior columns
+/// written, each vertical element edge the left element's force plus the right one's (the
+/// group's left edge: what the group before wrote there, when `after_a_group`).
+#[inline(always)]
+fn scatter_group<const N: usize>(f: &[[Lanes; 2]; N], group: &mut [f64], after_a_group: bool) {
+    let px = N - 1;
+    let left = if after_a_group {
+        [group[0], group[1]]
+    } else {
+        [0.0; 2]
+    };
+    for (a, fa) in f.iter().enumerate().take(px).skip(1) {
+        for l in 0..LANES {
+            group[2 * (l * px + a)] = fa[0][l];
+            group[2 * (l * px + a) + 1] = fa[1][l];
+        }
+    }
+    for l in 0..LANES {
+        let left = match l {
+            0 => left,
+            _ => [f[px][0][l - 1], f[px][1][l - 1]],
+        };
+        group[2 * l * px] = left[0] + f[0][0][l];
+        group[2 * l * px + 1] = left[1] + f[0][1][l];
+    }
+    group[2 * LANES * px] = f[px][0][LANES - 1];
+    group[2 * LANES * px + 1] = f[px][1][LANES - 1];
+}
+
+impl Predictor<'_> {
+    /// u_next = 2 u - u_prev - a .* (own + lower) on the DOFs `first..`: a node line of K u
+    /// without springs (the sum of its force lines) finished as it is read.
+    fn finish_sum(
+        &self,
+        first: usize,
+        u: &[f64],
+        own: &[f64],
+        lower: Option<&[f64]>,
+        next: &mut [f64],
+    ) {
+        let dofs = first..first + next.len();
+        let old = (self.a[dofs.clone()].iter())
+            .zip(&self.u_prev[dofs.clone()])
+            .zip(&u[dofs]);
+        let next = next.iter_mut().zip(old).zip(own);
+        match lower {
+            None => {
+                for ((n, ((&a, &p), &u)), &f) in next {
+                    *n = 2.0 * u - p - a * f;
+                }
+            }
+            Some(lower) => {
+                for (((n, ((&a, &p), &u)), &f), &l) in next.zip(lower) {
+                    *n = 2.0 * u - p - a * (f + l);
+                }
+            }
+        }
+    }
+}
+
+/// `values` in groups of [`LANES`], the last one padded with 1.
+fn lane_groups(values: impl ExactSizeIterator<Item = f64>) -> Vec<Lanes> {
+    let mut groups = vec![[1.0; LANES]; values.len().div_ceil(LANES)];
+    for (k, v) in values.enumerate() {
+        groups[k / LANES][k % LANES] = v;
+    }
+    groups
 }
 
 /// A GLL derivative matrix flattened row-wise, and its transpose.

@@ -165,4 +165,16 @@ impl Discretisation for SemModel {
     fn stiffness_times(&self, u: &[f64], out: &mut [f64], work: &mut SemWorkspace) {
         SemModel::stiffness_times(self, u, out, work);
     }
+    /// The fused kernel: each node line of K u finished as it is gathered
+    /// ([`SemModel::explicit_update`]).
+    fn explicit_update(
+        &self,
+        a: &[f64],
+        u_prev: &[f64],
+        u: &[f64],
+        u_next: &mut [f64],
+        work: &mut SemWorkspace,
+    ) {
+        SemModel::explicit_update(self, a, u_prev, u, u_next, work);
+    }
 }
