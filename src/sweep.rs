@@ -229,6 +229,26 @@ fn active() -> Option<Arc<Store>> {
     ACTIVE.with(|a| a.borrow().clone())
 }
 
+/// Runs `f` with `store` active on this thread, the previous one restored afterwards (also on
+/// panic).
+fn with_active<T>(store: Option<Arc<Store>>, f: impl FnOnce() -> T) -> T {
+    struct Restore(Option<Arc<Store>>);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            let old = self.0.take();
+            ACTIVE.with(|a| *a.borrow_mut() = old);
+        }
+    }
+    let old = ACTIVE.with(|a| std::mem::replace(&mut *a.borrow_mut(), store));
+    let _restore = Restore(old);
+    f()
+}
+
+/// Runs `f` with no store active: its first passes are computed and not stored (timing).
+pub fn without_store<T>(f: impl FnOnce() -> T) -> T {
+    with_active(None, f)
+}
+
 impl Store {
     /// The store under `out_dir` (files in `out_dir/points`), written through `root` when
     /// given, with `say` printing progress lines.
@@ -254,16 +274,7 @@ impl Store {
     /// Runs `f` with this store active on the current thread (sweeps and first passes
     /// started by `f` use it); the previous one is restored afterwards, also on panic.
     pub fn within<T>(self: &Arc<Self>, f: impl FnOnce() -> T) -> T {
-        struct Restore(Option<Arc<Store>>);
-        impl Drop for Restore {
-            fn drop(&mut self) {
-                let old = self.0.take();
-                ACTIVE.with(|a| *a.borrow_mut() = old);
-            }
-        }
-        let old = ACTIVE.with(|a| a.borrow_mut().replace(Arc::clone(self)));
-        let _restore = Restore(old);
-        f()
+        with_active(Some(Arc::clone(self)), f)
     }
 
     fn path(&self, kind: &str, key: &Key) -> PathBuf {

@@ -166,6 +166,12 @@ mod study_api {
         super::sweep(&ctx, name, &inputs, &points, &f)
     }
 
+    /// Calls `f` with no point store: the first passes it runs (impulse responses, TR-NEWS) are computed, never read from or written to points/, so that its run time is the computation's (for timing studies).
+    #[rhai_fn(return_raw)]
+    pub fn uncached(ctx: NativeCallContext, f: FnPtr) -> Res<Dynamic> {
+        crate::sweep::without_store(|| f.call_within_context::<Dynamic>(&ctx, ()))
+    }
+
     /// Default work-precision parameters #{element_sizes_m, explicit_fractions, newmark_multiples, depth_m, pulse_width_s}.
     #[rhai_fn(return_raw)]
     pub fn default_work_precision(ctx: NativeCallContext) -> Res<Dynamic> {
