@@ -17,9 +17,7 @@ fn cracked_and_uncracked_default_scenes_share_mesh_and_dt() {
     })
     .unwrap();
 
-    let crack = cracked
-        .crack()
-        .expect("the default scene is cracked");
+    let crack = cracked.crack().expect("the default scene is cracked");
     assert!(tied.crack().is_none() && tied.is_linear());
     let (gc, gt) = (
         cracked.mesh().grid.as_ref().unwrap(),

@@ -162,7 +162,11 @@ fn experiments_run_on_spectral_elements() {
         assert!(bytes.len() > 100, "{file} is nearly empty");
     }
     let table = std::fs::read_to_string(out.join("plots/trnews_focus.csv")).unwrap();
-    assert_eq!(table.lines().count(), 11, "header + 2 scenes x 5 receivers: {table}");
+    assert_eq!(
+        table.lines().count(),
+        11,
+        "header + 2 scenes x 5 receivers: {table}"
+    );
     let refused = run("q4");
     let message = String::from_utf8_lossy(&refused.stderr);
     assert!(

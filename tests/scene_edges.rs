@@ -8,8 +8,8 @@ use rustfft::FftPlanner;
 use trnews::material::{Material, Plane};
 use trnews::mesh::Side;
 use trnews::scene::{
-    Absorber, DiscretisationSpec, EdgeCondition, EdgeConditions, GmshSpec, LaminateSpec, LayerSpec, MaterialSpec,
-    ReceiverAt, ReceiverSpec, Scene, SceneSpec, SourceSpec,
+    Absorber, DiscretisationSpec, EdgeCondition, EdgeConditions, GmshSpec, LaminateSpec, LayerSpec,
+    MaterialSpec, ReceiverAt, ReceiverSpec, Scene, SceneSpec, SourceSpec,
 };
 use trnews::signal::Signal;
 use trnews::solve::RunConfig;

@@ -67,7 +67,10 @@ fn a_sem_scene_builds_its_nodes_crack_loads_and_receivers() {
     let p = cracked.crack_placement.as_ref().unwrap();
     let height = cracked.laminate.thickness_m();
     let line = height - p.depth_used_m;
-    assert!(model.rows_m.iter().any(|&y| (y - line).abs() < 1e-12), "{p:?}");
+    assert!(
+        model.rows_m.iter().any(|&y| (y - line).abs() < 1e-12),
+        "{p:?}"
+    );
     for x in [p.x0_used_m, p.x1_used_m] {
         assert!(model.x_nodes_m.contains(&x), "tip {x}");
     }
@@ -127,11 +130,7 @@ fn the_energy_ledger_closes_on_closed_and_open_sem_scenes() {
             out.report.energy_residual_peak, contact.steps_in_contact, contact.max_penetration_m
         );
         assert!(contact.steps_in_contact > 0, "the crack must close");
-        assert!(
-            out.report.energy_residual_peak < bound,
-            "{:?}",
-            out.report
-        );
+        assert!(out.report.energy_residual_peak < bound, "{:?}", out.report);
     }
 }
 
@@ -143,10 +142,7 @@ fn contact_on_a_sem_crack_acts_from_the_first_contact_and_not_before() {
     let spec = smoke_sem();
     let mut open = spec.clone();
     open.crack.as_mut().unwrap().contact = None;
-    let (contacting, open) = (
-        Scene::build(&spec).unwrap(),
-        Scene::build(&open).unwrap(),
-    );
+    let (contacting, open) = (Scene::build(&spec).unwrap(), Scene::build(&open).unwrap());
     assert!(open.is_linear() && open.crack().is_some());
     let drive = chirp(&contacting);
     let a = run(&contacting, &drive, 20e-6);
@@ -248,7 +244,10 @@ fn newmark_and_central_differences_agree_at_second_order_on_a_sem_scene() {
     let scene = Scene::build(&smoke_sem().uncracked()).unwrap();
     let drive = TrNewsSpec::smoke()
         .chirp
-        .signal(0.1 * scene.stability.dt_crit_s, scene.spec.transmitter.peak_pa)
+        .signal(
+            0.1 * scene.stability.dt_crit_s,
+            scene.spec.transmitter.peak_pa,
+        )
         .unwrap();
     let distance = |fraction: f64| {
         let traces = |integrator| {
@@ -272,7 +271,10 @@ fn newmark_and_central_differences_agree_at_second_order_on_a_sem_scene() {
     };
     let (coarse, fine) = (distance(0.2), distance(0.1));
     eprintln!("Newmark vs central differences: {coarse:.3e} at 0.2 dt_crit, {fine:.3e} at 0.1");
-    assert!(fine < 1e-3 && (3.5..4.5).contains(&(coarse / fine)), "{coarse:e} {fine:e}");
+    assert!(
+        fine < 1e-3 && (3.5..4.5).contains(&(coarse / fine)),
+        "{coarse:e} {fine:e}"
+    );
     let cracked = Scene::build(&smoke_sem()).unwrap();
     let config = RunConfig {
         dt_s: Some(cracked.default_dt_s()),

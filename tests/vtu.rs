@@ -238,7 +238,10 @@ fn snapshot_series(kind: &str) {
             .trim()
             .parse()
             .unwrap();
-        assert!(piece.num_points() == nodes && piece.cells.num_cells() > 0, "{kind}");
+        assert!(
+            piece.num_points() == nodes && piece.cells.num_cells() > 0,
+            "{kind}"
+        );
         // VTK vectors have three components (u_z = 0)
         assert_eq!(array(&piece.data.point, "displacement").len(), 3 * nodes);
         assert_eq!(

@@ -190,7 +190,7 @@ impl Figure for FieldFig<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
         let body = titled(root, &self.axes.title)?;
         let (main, bar) = body.split_horizontally(FIG_W - CBAR_W);
-        let frame = Frame::of(&self.axes);
+        let frame = Frame::of(self.axes);
         let probe = builder(&main, &frame)
             .build_cartesian_2d(0.0..1.0, 0.0..1.0)
             .map_err(draw_err)?;

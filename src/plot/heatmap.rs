@@ -93,7 +93,7 @@ impl<'a> HeatFig<'a> {
         X::CoordDescType: ValueFormatter<f64>,
         Y::CoordDescType: ValueFormatter<f64>,
     {
-        let frame = Frame::of(&self.axes);
+        let frame = Frame::of(self.axes);
         let mut chart = builder(area, &frame)
             .build_cartesian_2d(xr, yr)
             .map_err(draw_err)?;

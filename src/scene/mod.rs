@@ -12,8 +12,8 @@ use crate::mesh::{Grid, Mesh, Side};
 use crate::sem::SemModel;
 use crate::signal::Signal;
 use crate::solve::{
-    self, point_receiver, segment_receiver, segment_shares, Quantity, Receiver,
-    RunConfig, RunOutput, StabilityEstimate,
+    self, point_receiver, segment_receiver, segment_shares, Quantity, Receiver, RunConfig,
+    RunOutput, StabilityEstimate,
 };
 use crate::transducer::TransducerSpec;
 use serde::{Deserialize, Serialize};
@@ -666,6 +666,8 @@ impl SceneSpec {
 pub const STEP_FRACTION: f64 = 0.9;
 
 /// The discrete model of a scene.
+// One per scene, shared behind an Arc: the variants' different sizes cost nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 pub enum Body {
     /// Linear triangles (the report's method).
@@ -1553,8 +1555,13 @@ trait Attach {
     fn mesh(&self) -> &Mesh;
     /// Per-node weights of a unit uniform traction on the segment p..q of `side`: the
     /// integral of each node's shape function along it (m). `field` names the segment.
-    fn edge_load(&self, side: Side, p: [f64; 2], q: [f64; 2], field: &str)
-        -> Result<Vec<(usize, f64)>>;
+    fn edge_load(
+        &self,
+        side: Side,
+        p: [f64; 2],
+        q: [f64; 2],
+        field: &str,
+    ) -> Result<Vec<(usize, f64)>>;
     /// A receiver averaging (component, quantity) `recorded` over the face `ends` = (p, q) on
     /// `side`, or at the point p when q == p.
     fn face_receiver(
@@ -1566,8 +1573,12 @@ trait Attach {
     ) -> Result<Receiver>;
     /// A receiver of (component, quantity) `recorded` at the point p in the body,
     /// interpolated.
-    fn point_receiver(&self, name: &str, p: [f64; 2], recorded: (usize, Quantity))
-        -> Result<Receiver>;
+    fn point_receiver(
+        &self,
+        name: &str,
+        p: [f64; 2],
+        recorded: (usize, Quantity),
+    ) -> Result<Receiver>;
 }
 
 /// Linear triangles: loads by length shares ([`segment_shares`]), face receivers averaged

@@ -5,8 +5,8 @@
 
 use super::{
     absorbing_edges, build_laminate, check_inside, check_mesh_size, edge_conditions,
-    held_and_pinned_dofs, is_periodic, place_crack, source_weights, transmitter_weights,
-    Attach, Body, CrackPlacement, Region, Scene, SceneSpec,
+    held_and_pinned_dofs, is_periodic, place_crack, source_weights, transmitter_weights, Attach,
+    Body, CrackPlacement, Region, Scene, SceneSpec,
 };
 use crate::error::{require_positive, Error, Result};
 use crate::fem::AbsorbingEdge;

@@ -359,7 +359,7 @@ fn snapshot_vtu(
         components: 2,
         values: &snap.displacement,
     };
-    crate::io::write_vtu(file, &scene.mesh(), &[displacement], &[])
+    crate::io::write_vtu(file, scene.mesh(), &[displacement], &[])
 }
 
 /// The VTU files of a series of `count` snapshots beside the collection `pvd`:

@@ -61,7 +61,11 @@ impl SemModel {
             }
         }
         for &(d, spring) in &self.springs {
-            let along = if d % 2 == 0 { [spring, 0.0] } else { [0.0, spring] };
+            let along = if d % 2 == 0 {
+                [spring, 0.0]
+            } else {
+                [0.0, spring]
+            };
             k.add_diagonal(d / 2, along);
         }
         k
