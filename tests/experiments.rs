@@ -164,8 +164,8 @@ fn experiments_run_on_spectral_elements() {
     let table = std::fs::read_to_string(out.join("plots/trnews_focus.csv")).unwrap();
     assert_eq!(
         table.lines().count(),
-        11,
-        "header + 2 scenes x 5 receivers: {table}"
+        9,
+        "header + 2 scenes x the smoke scene's 4 receivers: {table}"
     );
     let refused = run("q4");
     let message = String::from_utf8_lossy(&refused.stderr);

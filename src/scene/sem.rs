@@ -19,29 +19,7 @@ use crate::solve::{
 /// The scene on spectral elements of orders `order_x` and up to `max_order_y` (see
 /// [`super::DiscretisationSpec::Sem`]).
 pub(super) fn build(spec: &SceneSpec, order_x: usize, max_order_y: usize) -> Result<Scene> {
-    if let Some(g) = &spec.gmsh {
-        return Err(Error::invalid(
-            "discretisation.kind",
-            "sem",
-            format!(
-                "a Gmsh mesh ({}) is made of linear triangles: use discretisation: #{{kind: \"t3\"}}",
-                g.path
-            ),
-        ));
-    }
-    for (field, order) in [
-        ("discretisation.order_x", order_x),
-        ("discretisation.max_order_y", max_order_y),
-    ] {
-        if !(1..=MAX_ORDER).contains(&order) {
-            return Err(Error::invalid(
-                field,
-                order,
-                format!("must be 1..={MAX_ORDER}"),
-            ));
-        }
-    }
-    require_positive("width_m", spec.width_m)?;
+    check_options(spec, order_x, max_order_y)?;
     let laminate = build_laminate(&spec.laminate, spec.plane)?;
     check_mesh_size(spec, &laminate, (order_x, max_order_y))?;
     let cut = SemSpec {
@@ -119,6 +97,35 @@ pub(super) fn build(spec: &SceneSpec, order_x: usize, max_order_y: usize) -> Res
         crack_placement,
         stability,
     })
+}
+
+/// Refuses what spectral-element scenes do not take: a Gmsh mesh, orders outside
+/// 1..=[`MAX_ORDER`], a width that is not a positive length.
+fn check_options(spec: &SceneSpec, order_x: usize, max_order_y: usize) -> Result<()> {
+    if let Some(g) = &spec.gmsh {
+        return Err(Error::invalid(
+            "discretisation.kind",
+            "sem",
+            format!(
+                "a Gmsh mesh ({}) is made of linear triangles: use discretisation: #{{kind: \"t3\"}}",
+                g.path
+            ),
+        ));
+    }
+    for (field, order) in [
+        ("discretisation.order_x", order_x),
+        ("discretisation.max_order_y", max_order_y),
+    ] {
+        if !(1..=MAX_ORDER).contains(&order) {
+            return Err(Error::invalid(
+                field,
+                order,
+                format!("must be 1..={MAX_ORDER}"),
+            ));
+        }
+    }
+    require_positive("width_m", spec.width_m)?;
+    Ok(())
 }
 
 /// Holds the `held` DOFs and puts the dashpots (and, with a distance, the viscous springs)
