@@ -142,7 +142,7 @@ pub struct ReceiverSpec {
     /// x positions (m).
     pub x_m: Vec<f64>,
     /// Width of the transducer face averaged over, for receivers on an edge (m); 0 records
-    /// the nearest node.
+    /// the nearest node (T3) or the point itself, interpolated (spectral elements).
     pub aperture_m: f64,
     /// Recorded component: 0 = u_x, 1 = u_y (default, like a normal-incidence transducer).
     pub component: usize,
@@ -241,8 +241,9 @@ fn unit_scale() -> f64 {
 }
 
 /// A receiver beyond the top-surface row of [`ReceiverSpec::x_m`]: a point anywhere in the
-/// body, `#{x_m, y_m}` (y above the bottom edge), interpolated from the T3 element that
-/// holds it with its linear shape functions (barycentric weights); or a position on an
+/// body, `#{x_m, y_m}` (y above the bottom edge), interpolated from the element that holds
+/// it (T3: its linear shape functions, barycentric weights; spectral elements: the GLL
+/// Lagrange polynomials); or a position on an
 /// edge, `#{edge, x_m}` (top, bottom) or `#{edge, depth_m}` (left, right), averaged over the
 /// transducer aperture like the top-surface receivers.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
