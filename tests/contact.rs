@@ -265,7 +265,7 @@ fn augmented_lagrangian_converges_below_bound_and_reports_divergence_above() {
 /// An epoxy block (2 x 0.25 mm, flat so the push does not tip it) resting on a fixed face through contact pairs on its whole
 /// bottom, pushed on its top by a uniform traction (p_t, -p_n) from t = 0.
 fn push_block(p_n: f64, p_t: f64, friction: f64) -> (RunOutput, f64) {
-    let (w, hgt, h) = (WIDTH, 0.25e-3, 50e-6);
+    let (w, hgt, h) = (BLOCK_WIDTH, 0.25e-3, 50e-6);
     let lam = Laminate::homogeneous(epoxy(), hgt).unwrap();
     let block = Mesh::layered(&lam, w, h, h, &[], &[]).unwrap();
     let n = block.nodes.len();
@@ -305,22 +305,7 @@ fn push_block(p_n: f64, p_t: f64, friction: f64) -> (RunOutput, f64) {
     let magnitude = p_n.hypot(p_t);
     let angle = (-p_n).atan2(p_t).to_degrees();
     let dt = 1e-9;
-    // Smooth half-cosine ramp over RAMP (5 wave transits of the block), then constant: the
-    // load is quasi-static, so the block barely bounces on the face.
-    let ramp = |t: f64| {
-        if t < RAMP {
-            0.5 * (1.0 - (std::f64::consts::PI * t / RAMP).cos())
-        } else {
-            1.0
-        }
-    };
-    let load = Signal {
-        dt_s: dt,
-        t0_s: 0.0,
-        samples: (0..(DURATION / dt) as usize + 2)
-            .map(|k| magnitude * ramp(k as f64 * dt))
-            .collect(),
-    };
+    let load = ramped_push(magnitude, dt);
     let src = traction_source(&model.mesh, [0.0, hgt], [w, hgt], angle, load).unwrap();
     let nodes: Vec<usize> = (0..n).collect();
     let total: f64 = nodes.iter().map(|&k| model.lumped_mass[2 * k]).sum();
@@ -340,22 +325,6 @@ fn push_block(p_n: f64, p_t: f64, friction: f64) -> (RunOutput, f64) {
     (run(&model, &[src], &[recv], &config).unwrap(), total)
 }
 
-const RAMP: f64 = 1e-6;
-const DURATION: f64 = 5e-6;
-const WIDTH: f64 = 2e-3;
-
-/// Average of a trace after the ramp.
-fn mean_after_ramp(v: &Signal) -> f64 {
-    let k1 = ((RAMP + 0.5e-6) / v.dt_s) as usize;
-    v.samples[k1..].iter().sum::<f64>() / (v.samples.len() - k1) as f64
-}
-
-/// Mean acceleration from the velocity trace between RAMP + 0.5 us and the end.
-fn acceleration_after_ramp(v: &Signal) -> f64 {
-    let (k1, k2) = (((RAMP + 0.5e-6) / v.dt_s) as usize, v.samples.len() - 1);
-    (v.samples[k2] - v.samples[k1]) / ((k2 - k1) as f64 * v.dt_s)
-}
-
 #[test]
 fn pushed_block_slides_at_coulomb_deceleration_or_sticks() {
     // Mean tangential acceleration of the block = (T - mu N)/m while every pair slips, with
@@ -363,7 +332,7 @@ fn pushed_block_slides_at_coulomb_deceleration_or_sticks() {
     // total normal contact force equals N up to the small residual bouncing of the block.
     let (mu, p_n, p_t) = (0.3, 1e6, 0.6e6);
     let (out, mass) = push_block(p_n, p_t, mu);
-    let expected = (p_t - mu * p_n) * WIDTH / mass;
+    let expected = (p_t - mu * p_n) * BLOCK_WIDTH / mass;
     let measured = acceleration_after_ramp(&out.traces[0]);
     assert!(
         (measured / expected - 1.0).abs() < 0.02,
@@ -376,7 +345,7 @@ fn pushed_block_slides_at_coulomb_deceleration_or_sticks() {
     // oscillates elastically, and its average is a small fraction of the speed free
     // sliding would reach, T/m (t_end - RAMP/2).
     let (out, mass) = push_block(p_n, 0.5 * mu * p_n, mu);
-    let free = 0.5 * mu * p_n * WIDTH / mass * (DURATION - 0.5 * RAMP);
+    let free = 0.5 * mu * p_n * BLOCK_WIDTH / mass * (DURATION - 0.5 * RAMP);
     let mean = mean_after_ramp(&out.traces[0]);
     assert!(
         mean.abs() < 0.02 * free,
@@ -389,13 +358,13 @@ fn friction_extremes_work() {
     // mu = 0: frictionless sliding at T/m; mu = 10: full stick.
     let (out, mass) = push_block(1e6, 0.2e6, 0.0);
     let measured = acceleration_after_ramp(&out.traces[0]);
-    let expected = 0.2e6 * WIDTH / mass;
+    let expected = 0.2e6 * BLOCK_WIDTH / mass;
     assert!(
         (measured / expected - 1.0).abs() < 0.02,
         "{measured:e} vs {expected:e}"
     );
     let (out, mass) = push_block(1e6, 0.5e6, 10.0);
-    let free = 0.5e6 * WIDTH / mass * (DURATION - 0.5 * RAMP);
+    let free = 0.5e6 * BLOCK_WIDTH / mass * (DURATION - 0.5 * RAMP);
     assert!(mean_after_ramp(&out.traces[0]).abs() < 0.02 * free);
     // Full stick: no drift (above), and slip events are isolated single-step micro-slips of
     // a corner pair where the pressure momentarily vanishes: under 0.1% of pair-steps.

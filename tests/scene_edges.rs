@@ -124,6 +124,17 @@ fn run_pulse(
     pulse: Ricker,
     duration: f64,
 ) -> (f64, Vec<Signal>) {
+    let (dt, out) = transmit_pulse(spec, dt, pulse, duration);
+    (dt, out.traces)
+}
+
+/// The step and the whole run of [`run_pulse`].
+fn transmit_pulse(
+    spec: &SceneSpec,
+    dt: Option<f64>,
+    pulse: Ricker,
+    duration: f64,
+) -> (f64, trnews::solve::RunOutput) {
     let scene = Scene::build(spec).unwrap();
     let dt = dt.unwrap_or(scene.default_dt_s());
     let n = (duration / dt).round() as usize + 1;
@@ -137,8 +148,7 @@ fn run_pulse(
         progress: false,
         ..scene.run_config(duration)
     };
-    let out = scene.transmit(&drive, &config).unwrap();
-    (dt, out.traces)
+    (dt, scene.transmit(&drive, &config).unwrap())
 }
 
 /// The exact u_y(y, t_n), t_n = n dt, of the continuum stack: per frequency, the state
@@ -305,19 +315,7 @@ fn sem_errors(order: usize, dt: f64) -> Vec<f64> {
         },
         ..spec(H0, EdgeCondition::Roller)
     };
-    let scene = Scene::build(&spec).unwrap();
-    let steps = (DURATION / dt).round() as usize + 1;
-    let drive = Signal {
-        dt_s: dt,
-        t0_s: 0.0,
-        samples: (0..steps).map(|k| ricker(k as f64 * dt, PULSE)).collect(),
-    };
-    let config = RunConfig {
-        dt_s: Some(dt),
-        progress: false,
-        ..scene.run_config(DURATION)
-    };
-    let out = scene.transmit(&drive, &config).unwrap();
+    let (_, out) = transmit_pulse(&spec, Some(dt), PULSE, DURATION);
     assert!(out.report.energy_residual_peak < 1e-6, "{:?}", out.report);
     let ys: Vec<f64> = POINTS.iter().map(|p| p.1).collect();
     let reference = exact(dt, out.traces[0].samples.len(), &ys);

@@ -530,10 +530,6 @@ fn bilinear_oscillator_period_is_half_open_plus_half_closed() {
     assert!(out.report.contact.as_ref().unwrap().steps_in_contact > 0);
 }
 
-const RAMP: f64 = 1e-6;
-const DURATION: f64 = 5e-6;
-const WIDTH: f64 = 2e-3;
-
 /// An epoxy block (2 x 0.25 mm: `columns` element columns and two element rows, all of
 /// `order`) resting on a fixed SEM base (one row 0.125 mm below, every DOF and the lower
 /// face held) through a through-crack on its whole bottom, pushed on its top by a uniform
@@ -546,7 +542,7 @@ fn push_block(
 ) -> (RunOutput, f64) {
     let (hb, hgt) = (0.125e-3, 0.25e-3);
     let mut m = SemModel::new(
-        lines(0.0, WIDTH, columns),
+        lines(0.0, BLOCK_WIDTH, columns),
         vec![0.0, hb, hb + 0.5 * hgt, hb + hgt],
         order,
         &[order, order, order],
@@ -554,26 +550,13 @@ fn push_block(
         vec![0; 3],
     )
     .unwrap();
-    let crack = m.split_crack(hb, 0.0, WIDTH).unwrap();
+    let crack = m.split_crack(hb, 0.0, BLOCK_WIDTH).unwrap();
     let (base, block) = parts(&m, &crack);
     m.fixed_dofs = base.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect();
     let magnitude = p_n.hypot(p_t);
     let angle = (-p_n).atan2(p_t).to_degrees();
     let dt = 1e-9;
-    let ramp = |t: f64| {
-        if t < RAMP {
-            0.5 * (1.0 - (std::f64::consts::PI * t / RAMP).cos())
-        } else {
-            1.0
-        }
-    };
-    let load = Signal {
-        dt_s: dt,
-        t0_s: 0.0,
-        samples: (0..(DURATION / dt) as usize + 2)
-            .map(|k| magnitude * ramp(k as f64 * dt))
-            .collect(),
-    };
+    let load = ramped_push(magnitude, dt);
     let src = top_traction(&m, angle, load);
     let mass: f64 = block.iter().map(|&n| m.lumped_mass[2 * n]).sum();
     let recv = mean_velocity(&m, &block, 0, "mean ux");
@@ -585,18 +568,6 @@ fn push_block(
     };
     let out = run_central_difference_on(&m, dt_crit(&m), &[src], &[recv], &config).unwrap();
     (out, mass)
-}
-
-/// Average of a trace after the ramp.
-fn mean_after_ramp(v: &Signal) -> f64 {
-    let k1 = ((RAMP + 0.5e-6) / v.dt_s) as usize;
-    v.samples[k1..].iter().sum::<f64>() / (v.samples.len() - k1) as f64
-}
-
-/// Mean acceleration from the velocity trace between RAMP + 0.5 us and the end.
-fn acceleration_after_ramp(v: &Signal) -> f64 {
-    let (k1, k2) = (((RAMP + 0.5e-6) / v.dt_s) as usize, v.samples.len() - 1);
-    (v.samples[k2] - v.samples[k1]) / ((k2 - k1) as f64 * v.dt_s)
 }
 
 /// Order 2 on 16 columns (0.125 mm elements): node-to-node Coulomb friction on the GLL nodes
@@ -618,9 +589,9 @@ fn pushed_block_slides_at_coulomb_deceleration_or_sticks() {
     // block's GLL mass); 2% as the T3 test (the residual bouncing of the block on the face).
     let (mu, p_n, p_t) = (0.3, 1e6, 0.6e6);
     let (out, mass) = push_block(FRICTION_GRID, p_n, p_t, mu);
-    let rho_area = epoxy().density_kg_m3 * WIDTH * 0.25e-3;
+    let rho_area = epoxy().density_kg_m3 * BLOCK_WIDTH * 0.25e-3;
     assert!((mass / rho_area - 1.0).abs() < 1e-13, "{mass:e}");
-    let expected = (p_t - mu * p_n) * WIDTH / mass;
+    let expected = (p_t - mu * p_n) * BLOCK_WIDTH / mass;
     let measured = acceleration_after_ramp(&out.traces[0]);
     let c = out.report.contact.as_ref().unwrap();
     eprintln!(
@@ -644,7 +615,7 @@ fn pushed_block_slides_at_coulomb_deceleration_or_sticks() {
     // oscillates elastically, its average a small fraction of the speed free sliding would
     // reach, T/m (t_end - RAMP/2).
     let (out, mass) = push_block(FRICTION_GRID, p_n, 0.5 * mu * p_n, mu);
-    let free = 0.5 * mu * p_n * WIDTH / mass * (DURATION - 0.5 * RAMP);
+    let free = 0.5 * mu * p_n * BLOCK_WIDTH / mass * (DURATION - 0.5 * RAMP);
     let mean = mean_after_ramp(&out.traces[0]);
     eprintln!("sticking: mean velocity {:e} of free sliding", mean / free);
     assert!(
@@ -660,7 +631,7 @@ fn pushed_block_slides_at_coulomb_deceleration_or_sticks() {
 fn frictionless_block_slides_at_t_over_m() {
     let (out, mass) = push_block((4, 8), 1e6, 0.2e6, 0.0);
     let measured = acceleration_after_ramp(&out.traces[0]);
-    let expected = 0.2e6 * WIDTH / mass;
+    let expected = 0.2e6 * BLOCK_WIDTH / mass;
     eprintln!("frictionless: {:.5} of T/m", measured / expected);
     assert!(
         (measured / expected - 1.0).abs() < 0.02,

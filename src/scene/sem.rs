@@ -199,13 +199,7 @@ pub(super) fn run(
                     "spectral elements have the GLL (diagonal) mass only: set consistent_mass: false",
                 ));
             }
-            if config.contact.is_some() && model.crack().is_some() {
-                return Err(Error::invalid(
-                    "integrator",
-                    "newmark",
-                    "contact is implemented for the explicit integrator only",
-                ));
-            }
+            solve::refuse_newmark_contact(config, model.crack())?;
             let stiffness = model.assemble_stiffness();
             let body = solve::NewmarkBody::sem(model, &stiffness)?;
             solve::run_newmark_on(body, dt_crit_s, sources, receivers, config)

@@ -233,16 +233,23 @@ pub fn run(
                     "periodic edges are implemented for the explicit integrator only",
                 ));
             }
-            if config.contact.is_some() && model.crack.is_some() {
-                return Err(Error::invalid(
-                    "integrator",
-                    "newmark",
-                    "contact is implemented for the explicit integrator only",
-                ));
-            }
+            refuse_newmark_contact(config, model.crack.as_ref())?;
             run_newmark(model, sources, receivers, config, consistent_mass)
         }
     }
+}
+
+/// Refuses Newmark on a body whose crack the run asks to make contact (the contact laws
+/// correct the explicit predictor only).
+pub(crate) fn refuse_newmark_contact(config: &RunConfig, crack: Option<&Crack>) -> Result<()> {
+    if config.contact.is_some() && crack.is_some() {
+        return Err(Error::invalid(
+            "integrator",
+            "newmark",
+            "contact is implemented for the explicit integrator only",
+        ));
+    }
+    Ok(())
 }
 
 /// Checks the run options, the sources' and receivers' DOFs and weights, and the initial
@@ -533,20 +540,7 @@ fn run_explicit(
     let stab = config
         .stability
         .unwrap_or_else(|| stability::estimate(model));
-    let node_x = |node: usize| fem.node_x(node);
-    let body = BodyShape {
-        dofs: model.dofs(),
-        crack: fem.crack(),
-        node_x: &node_x,
-    };
-    central_difference(
-        &fem,
-        body,
-        stab.dt_crit_s,
-        (sources, receivers),
-        config,
-        setup,
-    )
+    explicit_on(&fem, stab.dt_crit_s, (sources, receivers), config, setup)
 }
 
 /// Central differences with lumped mass on any discretisation (spectral elements, or a
@@ -563,20 +557,31 @@ pub fn run_central_difference_on<D: Discretisation>(
 ) -> Result<RunOutput> {
     body.check()?;
     validate(body.dofs(), sources, receivers, config)?;
+    explicit_on(
+        body,
+        dt_crit_s,
+        (sources, receivers),
+        config,
+        Instant::now(),
+    )
+}
+
+/// The standard explicit run of `body` (its DOFs, crack and node positions as the run's
+/// shape), the clock started at `setup`.
+fn explicit_on<D: Discretisation>(
+    body: &D,
+    dt_crit_s: f64,
+    io: (&[Source], &[Receiver]),
+    config: &RunConfig,
+    setup: Instant,
+) -> Result<RunOutput> {
     let node_x = |node: usize| body.node_x(node);
     let shape = BodyShape {
         dofs: body.dofs(),
         crack: body.crack(),
         node_x: &node_x,
     };
-    central_difference(
-        body,
-        shape,
-        dt_crit_s,
-        (sources, receivers),
-        config,
-        Instant::now(),
-    )
+    central_difference(body, shape, dt_crit_s, io, config, setup)
 }
 
 /// The explicit run: step, steps, the contact law chosen once here (so the loop of a body

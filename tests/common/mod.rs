@@ -289,3 +289,43 @@ fn laminate(layers_top_down: &[(Material, f64)]) -> Laminate {
         .collect();
     Laminate::from_layers(materials, layers).unwrap()
 }
+
+/// The pushed block of the friction tests (tests/contact.rs on T3, tests/sem_contact.rs on
+/// spectral elements): its width, the load's ramp time and the run's duration (s).
+pub const BLOCK_WIDTH: f64 = 2e-3;
+/// See [`BLOCK_WIDTH`].
+pub const RAMP: f64 = 1e-6;
+/// See [`BLOCK_WIDTH`].
+pub const DURATION: f64 = 5e-6;
+
+/// The push on the block at step `dt`: `magnitude` (Pa) ramped up over [`RAMP`] by a smooth
+/// half cosine (5 wave transits of the block, so the load is quasi-static and the block barely
+/// bounces on the face), then constant, over [`DURATION`].
+pub fn ramped_push(magnitude: f64, dt: f64) -> Signal {
+    let ramp = |t: f64| {
+        if t < RAMP {
+            0.5 * (1.0 - (std::f64::consts::PI * t / RAMP).cos())
+        } else {
+            1.0
+        }
+    };
+    Signal {
+        dt_s: dt,
+        t0_s: 0.0,
+        samples: (0..(DURATION / dt) as usize + 2)
+            .map(|k| magnitude * ramp(k as f64 * dt))
+            .collect(),
+    }
+}
+
+/// Average of a trace from RAMP + 0.5 us to the end.
+pub fn mean_after_ramp(v: &Signal) -> f64 {
+    let k1 = ((RAMP + 0.5e-6) / v.dt_s) as usize;
+    v.samples[k1..].iter().sum::<f64>() / (v.samples.len() - k1) as f64
+}
+
+/// Mean acceleration from the velocity trace between RAMP + 0.5 us and the end.
+pub fn acceleration_after_ramp(v: &Signal) -> f64 {
+    let (k1, k2) = (((RAMP + 0.5e-6) / v.dt_s) as usize, v.samples.len() - 1);
+    (v.samples[k2] - v.samples[k1]) / ((k2 - k1) as f64 * v.dt_s)
+}
