@@ -18,6 +18,7 @@
 //! the originals. Viscous springs ([`SemModel::viscous_springs`]) add a diagonal stiffness.
 
 mod assembled;
+mod even_odd;
 pub mod gll;
 mod layered;
 
@@ -27,6 +28,7 @@ use crate::error::{Error, Result};
 use crate::fem::{VISCOUS_SPRING_ALPHA_N, VISCOUS_SPRING_ALPHA_T};
 use crate::material::Material;
 use crate::mesh::{Crack, CrackPair, Side};
+use even_odd::EvenOdd;
 use gll::Gll;
 use rayon::prelude::*;
 
@@ -62,12 +64,12 @@ pub struct SemModel {
     gll_x: Gll,
     /// GLL rule of each element row (its order across y).
     gll_y: Vec<Gll>,
-    /// D_x flattened row-wise, and its transpose.
-    derivative_x: Vec<f64>,
-    derivative_x_t: Vec<f64>,
-    /// D_y of each element row, flattened, and its transpose.
-    derivative_y: Vec<Vec<f64>>,
-    derivative_y_t: Vec<Vec<f64>>,
+    /// D_x and its transpose, by their even-odd decompositions.
+    derivative_x: EvenOdd,
+    derivative_x_t: EvenOdd,
+    /// D_y of each element row and its transpose, the same way.
+    derivative_y: Vec<EvenOdd>,
+    derivative_y_t: Vec<EvenOdd>,
     /// First node row of each element row.
     first_line: Vec<usize>,
     /// Half widths jx = h_x / 2 of the element columns (dx/dxi), by lane group, the padding
@@ -126,6 +128,11 @@ struct RowWork {
     u: [Vec<Lanes>; 2],
     /// Weighted stresses W sigma_xx, W sigma_yy, W sigma_xy at the same points.
     stress: [Vec<Lanes>; 3],
+    /// Two derivatives across the row at the same points: of u_x and u_y in
+    /// [`SemModel::stresses`], of W sigma_xy and W sigma_yy in [`SemModel::scatter_forces`].
+    across: [Vec<Lanes>; 2],
+    /// The sums and differences of mirrored lines ([`EvenOdd::apply_across`]).
+    mirrored: Vec<Lanes>,
 }
 
 /// The model's springs sorted by node line (stably: the springs of one DOF keep their order),
@@ -214,8 +221,13 @@ impl SemModel {
             first_line.push(line);
             line += g.order();
         }
-        let (derivative_x, derivative_x_t) = flat_derivative(&gll_x);
-        let (derivative_y, derivative_y_t) = gll_y.iter().map(flat_derivative).unzip();
+        let derivative_x = EvenOdd::new(&gll_x.derivative);
+        let derivative_x_t = EvenOdd::transposed(&gll_x.derivative);
+        let derivative_y = gll_y.iter().map(|g| EvenOdd::new(&g.derivative)).collect();
+        let derivative_y_t = gll_y
+            .iter()
+            .map(|g| EvenOdd::transposed(&g.derivative))
+            .collect();
         let half_width = lane_groups(columns_m.windows(2).map(|w| 0.5 * (w[1] - w[0])));
         let mut model = SemModel {
             columns_m,
@@ -450,6 +462,8 @@ impl SemModel {
                     force: vec![0.0; (g.order() + 1) * self.nx() * 2],
                     u: [lanes(), lanes()],
                     stress: [lanes(), lanes(), lanes()],
+                    across: [lanes(), lanes()],
+                    mirrored: lanes(),
                 }
             })
             .collect();
@@ -673,13 +687,17 @@ impl SemModel {
             force,
             u: [ux, uy],
             stress: [sxx, syy, sxy],
+            across: [across_1, across_2],
+            mirrored,
         } = row;
         let (ux, uy) = (&mut ux[..points], &mut uy[..points]);
         let (sxx, syy, sxy) = (&mut sxx[..points], &mut syy[..points], &mut sxy[..points]);
+        let (a1, a2) = (&mut across_1[..points], &mut across_2[..points]);
         for (g, jx) in self.half_width.iter().enumerate() {
             self.gather::<N>(r, g * LANES, u, ux, uy);
-            self.stresses::<N>(r, jx, [ux, uy], [sxx, syy, sxy]);
-            self.scatter_forces::<N>(r, g * LANES, jx, [sxx, syy, sxy], force);
+            self.stresses::<N>(r, jx, [ux, uy], [a1, a2], mirrored, [sxx, syy, sxy]);
+            let stresses = [&*sxx, &*syy, &*sxy];
+            self.scatter_forces::<N>(r, g * LANES, jx, stresses, [a1, a2], mirrored, force);
         }
     }
 
@@ -740,21 +758,24 @@ impl SemModel {
     }
 
     /// Weighted stresses of a lane group at its GLL points (a, b): the gradients
-    /// d/dxi u(a, b) = sum_k D_x[a][k] u(k, b) and d/deta u(a, b) = sum_k D_y[b][k] u(a, k),
-    /// the strains eps = (u_x,xi / jx, u_y,eta / jy, u_x,eta / jy + u_y,xi / jx), and
-    /// W C eps with W = w_a w_b jx jy; every operation across the lanes (the group's
-    /// elements, each with its own jx).
+    /// d/dxi u(a, b) = sum_k D_x[a][k] u(k, b) and d/deta u(a, b) = sum_k D_y[b][k] u(a, k)
+    /// (by [`EvenOdd`]; the derivatives across the row into `across`), the strains
+    /// eps = (u_x,xi / jx, u_y,eta / jy, u_x,eta / jy + u_y,xi / jx), and W C eps with
+    /// W = w_a w_b jx jy; every operation across the lanes (the group's elements, each with its
+    /// own jx).
     #[inline(always)]
     fn stresses<const N: usize>(
         &self,
         r: usize,
         jx: &Lanes,
         [ux, uy]: [&[Lanes]; 2],
+        [ux_eta, uy_eta]: [&mut [Lanes]; 2],
+        mirrored: &mut [Lanes],
         [sxx, syy, sxy]: [&mut [Lanes]; 3],
     ) {
         let nby = ux.len() / N;
-        let dx = self.derivative_x.as_chunks::<N>().0;
-        let dy = &self.derivative_y[r];
+        self.derivative_y[r].apply_across::<N>(ux, mirrored, ux_eta);
+        self.derivative_y[r].apply_across::<N>(uy, mirrored, uy_eta);
         let (wx, wy) = (&self.gll_x.weights, &self.gll_y[r].weights);
         let jy = 0.5 * (self.rows_m[r + 1] - self.rows_m[r]);
         // local copies: the stores below cannot alias them, so they stay in registers
@@ -763,33 +784,22 @@ impl SemModel {
         let inv_jx = jx.map(|j| 1.0 / j);
         let inv_jy = 1.0 / jy;
         for b in 0..nby {
-            let dy_b = &dy[b * nby..(b + 1) * nby];
+            let ux_xi = self.derivative_x.apply::<N>(&ux[b * N..]);
+            let uy_xi = self.derivative_x.apply::<N>(&uy[b * N..]);
             for a in 0..N {
-                let (ux_xi, uy_xi) = (
-                    contract(&dx[a], &ux[b * N..]),
-                    contract(&dx[a], &uy[b * N..]),
-                );
-                let (mut ux_eta, mut uy_eta) = ([0.0; LANES], [0.0; LANES]);
-                for (k, &d) in dy_b.iter().enumerate() {
-                    let (vx, vy) = (&ux[k * N + a], &uy[k * N + a]);
-                    for l in 0..LANES {
-                        ux_eta[l] += d * vx[l];
-                        uy_eta[l] += d * vy[l];
-                    }
-                }
                 let w = wx[a] * wy[b] * jy;
                 let p = b * N + a;
                 // one simple loop per quantity, each a few vector operations
                 let (mut e_xx, mut e_yy, mut g_xy, mut weight) =
                     ([0.0; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
                 for l in 0..LANES {
-                    e_xx[l] = ux_xi[l] * inv_jx[l];
+                    e_xx[l] = ux_xi[a][l] * inv_jx[l];
                 }
                 for l in 0..LANES {
-                    e_yy[l] = uy_eta[l] * inv_jy;
+                    e_yy[l] = uy_eta[p][l] * inv_jy;
                 }
                 for l in 0..LANES {
-                    g_xy[l] = ux_eta[l] * inv_jy + uy_xi[l] * inv_jx[l];
+                    g_xy[l] = ux_eta[p][l] * inv_jy + uy_xi[a][l] * inv_jx[l];
                 }
                 for l in 0..LANES {
                     weight[l] = w * jx[l];
@@ -804,11 +814,12 @@ impl SemModel {
     }
 
     /// Nodal forces of a lane group (columns `c0..`) from its weighted stresses, by the
-    /// transposed derivatives:
+    /// transposed derivatives (by [`EvenOdd`]; those across the row into `across`):
     /// f_x(a, b) = sum_k D_x[k][a] W sxx(k, b) / jx + sum_k D_y[k][b] W sxy(a, k) / jy,
     /// f_y(a, b) = sum_k D_x[k][a] W sxy(k, b) / jx + sum_k D_y[k][b] W syy(a, k) / jy,
     /// written into the row's force lines in column order, a node on a vertical element edge
     /// taking the left element's force plus the right one's.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn scatter_forces<const N: usize>(
         &self,
@@ -816,33 +827,25 @@ impl SemModel {
         c0: usize,
         jx: &Lanes,
         [sxx, syy, sxy]: [&[Lanes]; 3],
+        [fx_eta, fy_eta]: [&mut [Lanes]; 2],
+        mirrored: &mut [Lanes],
         force: &mut [f64],
     ) {
         let (nx, px, nby) = (self.nx(), N - 1, sxx.len() / N);
-        let dxt = self.derivative_x_t.as_chunks::<N>().0;
-        let dyt = &self.derivative_y_t[r];
+        self.derivative_y_t[r].apply_across::<N>(sxy, mirrored, fx_eta);
+        self.derivative_y_t[r].apply_across::<N>(syy, mirrored, fy_eta);
         let inv_jx = jx.map(|j| 1.0 / j);
         let inv_jy = 2.0 / (self.rows_m[r + 1] - self.rows_m[r]);
         let lanes = LANES.min(self.columns_m.len() - 1 - c0);
         for b in 0..nby {
-            let dyt_b = &dyt[b * nby..(b + 1) * nby];
+            let fx_xi = self.derivative_x_t.apply::<N>(&sxx[b * N..]);
+            let fy_xi = self.derivative_x_t.apply::<N>(&sxy[b * N..]);
             let mut f = [[[0.0; LANES]; 2]; N];
             for (a, fa) in f.iter_mut().enumerate() {
-                let (fx_xi, fy_xi) = (
-                    contract(&dxt[a], &sxx[b * N..]),
-                    contract(&dxt[a], &sxy[b * N..]),
-                );
-                let (mut fx_eta, mut fy_eta) = ([0.0; LANES], [0.0; LANES]);
-                for (k, &d) in dyt_b.iter().enumerate() {
-                    let (s1, s2) = (&sxy[k * N + a], &syy[k * N + a]);
-                    for l in 0..LANES {
-                        fx_eta[l] += d * s1[l];
-                        fy_eta[l] += d * s2[l];
-                    }
-                }
+                let p = b * N + a;
                 for l in 0..LANES {
-                    fa[0][l] = fx_xi[l] * inv_jx[l] + fx_eta[l] * inv_jy;
-                    fa[1][l] = fy_xi[l] * inv_jx[l] + fy_eta[l] * inv_jy;
+                    fa[0][l] = fx_xi[a][l] * inv_jx[l] + fx_eta[p][l] * inv_jy;
+                    fa[1][l] = fy_xi[a][l] * inv_jx[l] + fy_eta[p][l] * inv_jy;
                 }
             }
             let line = &mut force[2 * b * nx..2 * (b + 1) * nx];
@@ -1011,18 +1014,6 @@ fn nearest(values: &[f64], v: f64) -> f64 {
         .unwrap_or(f64::NAN)
 }
 
-/// sum_k d[k] v[k] across the lanes, the first `N` entries of `v`.
-#[inline(always)]
-fn contract<const N: usize>(d: &[f64; N], v: &[Lanes]) -> Lanes {
-    let mut sum = [0.0; LANES];
-    for (&dk, vk) in d.iter().zip(&v[..N]) {
-        for l in 0..LANES {
-            sum[l] += dk * vk[l];
-        }
-    }
-    sum
-}
-
 /// The forces `f[a][component][lane]` of a full lane group into its node columns `group`
 /// (LANES elements of N - 1 columns, and the last one's right edge): the interior columns
 /// written, each vertical element edge the left element's force plus the right one's (the
@@ -1091,14 +1082,6 @@ fn lane_groups(values: impl ExactSizeIterator<Item = f64>) -> Vec<Lanes> {
         groups[k / LANES][k % LANES] = v;
     }
     groups
-}
-
-/// A GLL derivative matrix flattened row-wise, and its transpose.
-fn flat_derivative(g: &Gll) -> (Vec<f64>, Vec<f64>) {
-    let n = g.order() + 1;
-    let d: Vec<f64> = g.derivative.iter().flatten().copied().collect();
-    let t = (0..n * n).map(|k| d[(k % n) * n + k / n]).collect();
-    (d, t)
 }
 
 /// Index of the interval of ascending `lines` holding `v` (the lower one on a shared line),

@@ -1,0 +1,162 @@
+//! The even-odd decomposition of a GLL derivative matrix (Solomonoff 1992; Kopriva 2009,
+//! sec. 3.5; as deal.II's sum-factorisation kernels use it): the points are symmetric about
+//! the element centre, so D[n-1-a][n-1-k] = -D[a][k], and with the sums and differences of
+//! mirrored values, e_k = v_k + v_{n-1-k}, o_k = v_k - v_{n-1-k} (k < h = n / 2),
+//!
+//!   E_a = sum_k P[a][k] e_k + D[a][h] v_h,   O_a = sum_k Q[a][k] o_k,
+//!   (D v)_a = E_a + O_a,   (D v)_{n-1-a} = O_a - E_a,
+//!
+//! with P = (D[a][k] + D[a][n-1-k]) / 2, Q = (D[a][k] - D[a][n-1-k]) / 2, the middle term
+//! D[a][h] v_h only for odd n, and at the middle point itself (odd n) (D v)_h = O_h. A
+//! derivative of n values then costs about n^2 / 2 multiplications instead of n^2. The
+//! transposed matrix has the same symmetry, so the same code applies D^T.
+//!
+//! Results differ from the plain product by round-off only (the symmetry of the computed D
+//! holds to round-off); the operations are fixed, so they do not depend on the thread count
+//! or the instruction set.
+
+use super::{Lanes, LANES};
+
+/// Largest half size: n <= MAX_ORDER + 1 = 17 points.
+const MAX_HALF: usize = (super::MAX_ORDER + 1) / 2;
+
+/// P, Q and the middle column of an n x n matrix with D[n-1-a][n-1-k] = -D[a][k].
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct EvenOdd {
+    /// Number of points n.
+    n: usize,
+    /// P[a][k] for a < (n + 1) / 2, k < n / 2.
+    even: [[f64; MAX_HALF]; MAX_HALF + 1],
+    /// Q[a][k], same shape.
+    odd: [[f64; MAX_HALF]; MAX_HALF + 1],
+    /// D[a][n / 2] for odd n (zero for even n).
+    middle: [f64; MAX_HALF + 1],
+}
+
+impl EvenOdd {
+    /// The decomposition of `matrix` (n x n, n <= MAX_ORDER + 1, rows of `matrix[a]`).
+    pub(super) fn new(matrix: &[Vec<f64>]) -> EvenOdd {
+        let n = matrix.len();
+        assert!(n <= 2 * MAX_HALF + 1, "{n} points: above MAX_ORDER + 1");
+        let h = n / 2;
+        let mut m = EvenOdd {
+            n,
+            even: [[0.0; MAX_HALF]; MAX_HALF + 1],
+            odd: [[0.0; MAX_HALF]; MAX_HALF + 1],
+            middle: [0.0; MAX_HALF + 1],
+        };
+        for a in 0..n.div_ceil(2) {
+            for k in 0..h {
+                let (d, mirrored) = (matrix[a][k], matrix[a][n - 1 - k]);
+                m.even[a][k] = 0.5 * (d + mirrored);
+                m.odd[a][k] = 0.5 * (d - mirrored);
+            }
+            if n % 2 == 1 {
+                m.middle[a] = matrix[a][h];
+            }
+        }
+        m
+    }
+
+    /// The transposed matrix's decomposition.
+    pub(super) fn transposed(matrix: &[Vec<f64>]) -> EvenOdd {
+        let n = matrix.len();
+        let t: Vec<Vec<f64>> = (0..n)
+            .map(|a| (0..n).map(|k| matrix[k][a]).collect())
+            .collect();
+        EvenOdd::new(&t)
+    }
+
+    /// `out[a] = sum_k D[a][k] v[k]` across the lanes, for the `N` values of `v` (n = N,
+    /// a compile-time size: along x).
+    #[inline(always)]
+    pub(super) fn apply<const N: usize>(&self, v: &[Lanes]) -> [Lanes; N] {
+        let v: &[Lanes; N] = v[..N].try_into().expect("N values");
+        let h = N / 2;
+        let (mut e, mut o) = ([[0.0; LANES]; N], [[0.0; LANES]; N]);
+        for k in 0..h {
+            for l in 0..LANES {
+                e[k][l] = v[k][l] + v[N - 1 - k][l];
+                o[k][l] = v[k][l] - v[N - 1 - k][l];
+            }
+        }
+        let mut out = [[0.0; LANES]; N];
+        for a in 0..N.div_ceil(2) {
+            let (mut even, mut odd) = ([0.0; LANES], [0.0; LANES]);
+            for k in 0..h {
+                let (p, q) = (self.even[a][k], self.odd[a][k]);
+                for l in 0..LANES {
+                    even[l] += p * e[k][l];
+                    odd[l] += q * o[k][l];
+                }
+            }
+            let (low, high) = self.outputs(a, even, odd, &v[h]);
+            out[a] = low;
+            out[N - 1 - a] = high;
+        }
+        out
+    }
+
+    /// `out[b * N + a] = sum_k D[b][k] v[k * N + a]` across the lanes: the derivative across
+    /// the n lines of N points each of `v` (n = self's size, known at run time: across a
+    /// row). `scratch` holds the lines' sums and differences.
+    #[inline(always)]
+    pub(super) fn apply_across<const N: usize>(
+        &self,
+        v: &[Lanes],
+        scratch: &mut [Lanes],
+        out: &mut [Lanes],
+    ) {
+        let (n, h) = (self.n, self.n / 2);
+        let v = &v[..n * N];
+        let (e, o) = scratch[..2 * h * N].split_at_mut(h * N);
+        for k in 0..h {
+            let (low, high) = (&v[k * N..][..N], &v[(n - 1 - k) * N..][..N]);
+            let (e, o) = (&mut e[k * N..][..N], &mut o[k * N..][..N]);
+            for a in 0..N {
+                for l in 0..LANES {
+                    e[a][l] = low[a][l] + high[a][l];
+                    o[a][l] = low[a][l] - high[a][l];
+                }
+            }
+        }
+        let out = &mut out[..n * N];
+        for b in 0..n.div_ceil(2) {
+            let (p, q) = (&self.even[b][..h], &self.odd[b][..h]);
+            for a in 0..N {
+                let (mut even, mut odd) = ([0.0; LANES], [0.0; LANES]);
+                for k in 0..h {
+                    let (ek, ok) = (&e[k * N + a], &o[k * N + a]);
+                    for l in 0..LANES {
+                        even[l] += p[k] * ek[l];
+                        odd[l] += q[k] * ok[l];
+                    }
+                }
+                let (low, high) = self.outputs(b, even, odd, &v[h * N + a]);
+                out[b * N + a] = low;
+                out[(n - 1 - b) * N + a] = high;
+            }
+        }
+    }
+
+    /// Outputs a and n-1-a, (E + O, O - E), from the even sum (to which the middle term
+    /// D[a][h] v_h is added for odd n) and the odd one; at the middle point (odd n) both are
+    /// O alone.
+    #[inline(always)]
+    fn outputs(&self, a: usize, mut even: Lanes, odd: Lanes, middle: &Lanes) -> (Lanes, Lanes) {
+        if 2 * a + 1 == self.n {
+            return (odd, odd);
+        }
+        if self.n % 2 == 1 {
+            for l in 0..LANES {
+                even[l] += self.middle[a] * middle[l];
+            }
+        }
+        let (mut low, mut high) = ([0.0; LANES], [0.0; LANES]);
+        for l in 0..LANES {
+            low[l] = even[l] + odd[l];
+            high[l] = odd[l] - even[l];
+        }
+        (low, high)
+    }
+}
