@@ -514,8 +514,8 @@ pub enum DiscretisationSpec {
     #[default]
     T3,
     /// Spectral elements ([`crate::sem`]): GLL points of `order_x` along x in every element,
-    /// and across each element row the highest order up to `max_order_y` that keeps 90% of
-    /// the step order 1 across every row would allow (thin layers take a low order, so they
+    /// and across each element row the highest order up to `max_order_y` whose smallest GLL
+    /// gap is no smaller than the smallest gap along x (thin layers take a low order, so they
     /// do not set the time step; [`crate::sem::SemSpec`]).
     Sem {
         /// Polynomial order along x.

@@ -17,8 +17,8 @@
 
 use super::{Lanes, LANES};
 
-/// Largest half size: n <= MAX_ORDER + 1 = 17 points.
-const MAX_HALF: usize = (super::MAX_ORDER + 1) / 2;
+/// Largest half size n / 2 (rounded down), n <= MAX_ORDER + 1 = 17 points.
+const MAX_HALF: usize = super::MAX_ORDER.div_ceil(2);
 
 /// P, Q and the middle column of an n x n matrix with D[n-1-a][n-1-k] = -D[a][k].
 #[derive(Clone, Debug, PartialEq)]
@@ -45,14 +45,14 @@ impl EvenOdd {
             odd: [[0.0; MAX_HALF]; MAX_HALF + 1],
             middle: [0.0; MAX_HALF + 1],
         };
-        for a in 0..n.div_ceil(2) {
+        for (a, row) in matrix.iter().enumerate().take(n.div_ceil(2)) {
             for k in 0..h {
-                let (d, mirrored) = (matrix[a][k], matrix[a][n - 1 - k]);
+                let (d, mirrored) = (row[k], row[n - 1 - k]);
                 m.even[a][k] = 0.5 * (d + mirrored);
                 m.odd[a][k] = 0.5 * (d - mirrored);
             }
             if n % 2 == 1 {
-                m.middle[a] = matrix[a][h];
+                m.middle[a] = row[h];
             }
         }
         m

@@ -5,16 +5,14 @@ use super::gll::Gll;
 use super::SemModel;
 use crate::error::{Error, Result};
 use crate::laminate::Laminate;
-use crate::material::Material;
 use crate::mesh::Side;
 use serde::{Deserialize, Serialize};
 
 /// How a laminate is cut into spectral elements: one order along x for the grid, element rows
 /// aligned with the layers (a thick layer split into rows of at most `element_size_y_m`), and
-/// per row the highest order up to `max_order_y` that keeps 90% of the step order 1 across
-/// every row would allow ([`order_across`]). Thin or stiff-across layers so take a low order
-/// and do not set the step; horizontal element edges carry only x-direction points, so the
-/// mesh stays conforming.
+/// per row the highest order up to `max_order_y` whose smallest GLL gap across the row is no
+/// smaller than the smallest gap along x, so thin layers take a low order and do not set the
+/// time step (horizontal element edges carry only x-direction points: still conforming).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SemSpec {
@@ -41,78 +39,10 @@ impl Default for SemSpec {
     }
 }
 
-/// Largest eigenvalue of M_e^-1 K_e of one free element `width_m` x `height_m` of `material`,
-/// orders `order_x` along and `order_y` across: by the element-by-element bound
-/// (Irons and Treharne 1971) the global lambda_max, which sets dt_crit = 2 / sqrt(lambda_max),
-/// is at most the largest over the elements. K_e is built column by column from the
-/// matrix-free product and its eigenvalues taken dense: at most 2 (p + 1)^2 = 578 DOFs.
-fn element_max_eigenvalue(
-    material: &Material,
-    (width_m, height_m): (f64, f64),
-    (order_x, order_y): (usize, usize),
-) -> Result<f64> {
-    let element = SemModel::new(
-        vec![0.0, width_m],
-        vec![0.0, height_m],
-        order_x,
-        &[order_y],
-        vec![material.clone()],
-        vec![0],
-    )?;
-    let n = element.dofs();
-    let scale: Vec<f64> = element.lumped_mass.iter().map(|m| 1.0 / m.sqrt()).collect();
-    let mut a = nalgebra::DMatrix::zeros(n, n);
-    let (mut unit, mut column) = (vec![0.0; n], vec![0.0; n]);
-    let mut work = element.workspace();
-    for j in 0..n {
-        unit[j] = scale[j];
-        element.stiffness_times(&unit, &mut column, &mut work);
-        unit[j] = 0.0;
-        for i in 0..n {
-            a[(i, j)] = scale[i] * column[i];
-        }
-    }
-    let a = 0.5 * (&a + a.transpose());
-    Ok(a.symmetric_eigenvalues().max())
-}
-
-/// The share of the step that order 1 across every row would allow which the orders across
-/// keep: a row takes a higher order only while its element eigenvalue stays below
-/// floor / STEP_KEPT^2. At 1 no ply of the default laminate could take more than order 1
-/// (any order across adds to the eigenvalue the order along x sets); at 0.9 the default
-/// experiment's order-7 scene gives its plies order 2-3 across and keeps 0.97 of that step,
-/// 14% longer than orders chosen by GLL gaps alone gave, at the same accuracy (README,
-/// "Spectral elements").
-pub(super) const STEP_KEPT: f64 = 0.9;
-
-/// The order across each row (`rows`: height and material): the highest up to `max_order` whose
-/// element eigenvalue ([`element_max_eigenvalue`]) stays below floor / STEP_KEPT^2, the floor
-/// being the largest eigenvalue any row has at order 1 (the least any mesh of these rows can
-/// have); so the orders across keep at least [`STEP_KEPT`] of the step order 1 everywhere
-/// would allow.
-fn order_across(
-    rows: &[(f64, &Material)],
-    width_m: f64,
-    order_x: usize,
-    max_order: usize,
-) -> Result<Vec<usize>> {
-    let eigenvalue = |(height, material): (f64, &Material), p| {
-        element_max_eigenvalue(material, (width_m, height), (order_x, p))
-    };
-    let mut floor: f64 = 0.0;
-    for &row in rows {
-        floor = floor.max(eigenvalue(row, 1)?);
-    }
-    // the eigenvalue grows with the order (the GLL gaps shrink): search upwards
-    let mut orders = Vec::with_capacity(rows.len());
-    for &row in rows {
-        let mut order = 1;
-        while order < max_order && eigenvalue(row, order + 1)? <= floor / (STEP_KEPT * STEP_KEPT) {
-            order += 1;
-        }
-        orders.push(order);
-    }
-    Ok(orders)
+/// Smallest gap between the GLL points of order `p` on an element of size `h`.
+fn smallest_gap(h: f64, p: usize) -> f64 {
+    let g = Gll::new(p);
+    0.5 * h * (g.points[1] - g.points[0])
 }
 
 impl SemModel {
@@ -135,7 +65,7 @@ impl SemModel {
             interfaces.push(interfaces[interfaces.len() - 1] + layer.thickness_m);
         }
         let rows_m = crate::mesh::subdivide(&interfaces, spec.element_size_y_m);
-        let row_material: Vec<usize> = rows_m
+        let row_material = rows_m
             .windows(2)
             .map(|w| {
                 let middle = 0.5 * (w[0] + w[1]);
@@ -144,13 +74,17 @@ impl SemModel {
             })
             .collect();
         let columns_m = crate::mesh::subdivide(&[0.0, width_m], spec.element_size_x_m);
-        let width = width_m / (columns_m.len() - 1) as f64;
-        let rows: Vec<(f64, &Material)> = rows_m
+        let columns = columns_m.len() - 1;
+        let x_gap = smallest_gap(width_m / columns as f64, spec.order_x.max(1));
+        let order_y: Vec<usize> = rows_m
             .windows(2)
-            .zip(&row_material)
-            .map(|(w, &m)| (w[1] - w[0], &laminate.materials[m]))
+            .map(|w| {
+                (1..=spec.max_order_y.max(1))
+                    .rev()
+                    .find(|&p| smallest_gap(w[1] - w[0], p) >= x_gap)
+                    .unwrap_or(1)
+            })
             .collect();
-        let order_y = order_across(&rows, width, spec.order_x, spec.max_order_y)?;
         SemModel::new(
             columns_m,
             rows_m,
