@@ -71,6 +71,7 @@ impl EvenOdd {
     /// a compile-time size: along x).
     #[inline(always)]
     pub(super) fn apply<const N: usize>(&self, v: &[Lanes]) -> [Lanes; N] {
+        debug_assert_eq!(self.n, N, "the decomposition's size");
         let v: &[Lanes; N] = v[..N].try_into().expect("N values");
         let h = N / 2;
         let (mut e, mut o) = ([[0.0; LANES]; N], [[0.0; LANES]; N]);
