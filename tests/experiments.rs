@@ -61,6 +61,7 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         "measured_channel_h.npy",
         "sem_target.csv",
         "sem_target.png",
+        "sem_target_timing.csv",
     ] {
         let path = out.join("plots").join(file);
         let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));

@@ -135,8 +135,9 @@ struct RowWork {
     mirrored: Vec<Lanes>,
 }
 
-/// The model's springs sorted by node line (stably: the springs of one DOF keep their order),
-/// the crack's duplicates last, with the list they were sorted from (rebuilt if it changes).
+/// The model's springs sorted by DOF (stably: the springs of one DOF keep their order), so by
+/// node line with the crack's duplicates last, with the list they were sorted from (rebuilt if
+/// it changes).
 #[derive(Clone, Debug, Default)]
 struct SpringLines {
     springs: Vec<(usize, f64)>,
@@ -150,7 +151,7 @@ impl SpringLines {
         let (nx, lines) = (model.nx(), model.y_nodes_m.len());
         let line = |d: usize| (d / 2 / nx).min(lines);
         let mut sorted = model.springs.clone();
-        sorted.sort_by_key(|&(d, _)| line(d));
+        sorted.sort_by_key(|&(d, _)| d);
         let start = (0..=lines + 1)
             .map(|j| sorted.partition_point(|&(d, _)| line(d) < j))
             .collect();
@@ -564,9 +565,9 @@ impl SemModel {
                 let first = 2 * j * nx;
                 let crack_line = self.split.as_ref().is_some_and(|s| s.line == j);
                 match predictor {
-                    Some(p) if springs.line(j).is_empty() && !crack_line => {
+                    Some(p) if !crack_line => {
                         let (own, lower) = self.line_sources(j, rows, line.len());
-                        p.finish_sum(first, u, own, lower, line);
+                        p.finish_sum(first, u, (own, lower), springs.line(j), line);
                     }
                     _ => {
                         self.node_line_forces(j, rows, line);
@@ -1045,14 +1046,55 @@ fn scatter_group<const N: usize>(f: &[[Lanes; 2]; N], group: &mut [f64], after_a
 }
 
 impl Predictor<'_> {
-    /// u_next = 2 u - u_prev - a .* (own + lower) on the DOFs `first..`: a node line of K u
-    /// without springs (the sum of its force lines) finished as it is read.
+    /// u_next = 2 u - u_prev - a .* (own + lower + k u) on the DOFs `first..`: a node line of
+    /// K u (the sum of its force lines, plus the line's `springs`, sorted by DOF) finished as
+    /// it is read. A DOF's springs are added in their order after the force lines, as
+    /// [`SemModel::stiffness_times`] adds them: bit-identical to it.
     fn finish_sum(
         &self,
         first: usize,
         u: &[f64],
-        own: &[f64],
-        lower: Option<&[f64]>,
+        (own, lower): (&[f64], Option<&[f64]>),
+        springs: &[(usize, f64)],
+        next: &mut [f64],
+    ) {
+        let mut start = 0;
+        let mut rest = springs;
+        while let Some(&(d, _)) = rest.first() {
+            let i = d - first;
+            self.finish_plain(
+                first + start,
+                u,
+                (&own[start..i], lower.map(|l| &l[start..i])),
+                &mut next[start..i],
+            );
+            let mut ku = match lower {
+                None => own[i],
+                Some(lower) => own[i] + lower[i],
+            };
+            let count = rest.iter().take_while(|s| s.0 == d).count();
+            for &(_, k) in &rest[..count] {
+                ku += k * u[d];
+            }
+            next[i] = 2.0 * u[d] - self.u_prev[d] - self.a[d] * ku;
+            rest = &rest[count..];
+            start = i + 1;
+        }
+        let end = next.len();
+        self.finish_plain(
+            first + start,
+            u,
+            (&own[start..], lower.map(|l| &l[start..])),
+            &mut next[start..end],
+        );
+    }
+
+    /// u_next = 2 u - u_prev - a .* (own + lower) on the DOFs `first..` (no springs).
+    fn finish_plain(
+        &self,
+        first: usize,
+        u: &[f64],
+        (own, lower): (&[f64], Option<&[f64]>),
         next: &mut [f64],
     ) {
         let dofs = first..first + next.len();
