@@ -1,8 +1,9 @@
 //! Cost of one spectral-element explicit step (the central-difference predictor with K u,
 //! `Discretisation::explicit_update`, as the stepper calls it) per DOF, on the default
 //! stochastic laminate 16 mm wide cut into 0.25 mm x 0.25 mm elements (order p along x, up
-//! to p across a row), for p = 2, 4, 6, 8 on 1 and 2 threads: best of `REPS` steps, after
-//! a warm-up. The machine may be shared, so run it a few times and take the minima.
+//! to p across a row), for p = 2, 4, 6, 8, and into 0.5 mm elements of order 7 (the default
+//! experiment's 2% candidate, `scripts/sem_target.rhai`), on 1 and 2 threads: best of `REPS`
+//! steps, after a warm-up. The machine may be shared, so run it a few times and take the minima.
 //!
 //! `cargo run --release --example sem_kernel_timing`
 
@@ -35,12 +36,18 @@ fn best_step(m: &SemModel) -> f64 {
 
 fn main() {
     let lam = Laminate::stochastic(&StochasticSpec::default(), Plane::Strain).expect("laminate");
-    for p in [2, 4, 6, 8] {
+    for (p, h) in [
+        (2, 0.25e-3),
+        (4, 0.25e-3),
+        (6, 0.25e-3),
+        (8, 0.25e-3),
+        (7, 0.5e-3),
+    ] {
         let spec = SemSpec {
             order_x: p,
             max_order_y: p,
-            element_size_x_m: 0.25e-3,
-            element_size_y_m: 0.25e-3,
+            element_size_x_m: h,
+            element_size_y_m: h,
         };
         let m = SemModel::layered(&lam, WIDTH_M, &spec).expect("sem");
         for threads in [1, 2] {

@@ -5,8 +5,8 @@
 //! most `row_m`), elements `hx` wide with order `px` along x. Across each row the order is
 //! either `px` everywhere ("uniform") or, per row, the largest order up to `max_y` whose
 //! smallest GLL gap across the row is no smaller than the smallest GLL gap along x ("per
-//! layer", `SemModel::layered`), so the thin layers stop setting the step. dt_crit is Lanczos' estimate of 2 / sqrt(lambda_max(M^-1 K))
-//! on the free block; the T3 quick scene is the comparison (run on this machine: its dt_crit
+//! layer", `SemModel::layered`), so the thin layers stop setting the step. dt_crit is
+//! Lanczos' estimate of 2 / sqrt(lambda_max(M^-1 K)) on the free block; the T3 quick scene is the comparison (run on this machine: its dt_crit
 //! and DOFs come from the same estimate).
 //!
 //! `cargo run --release --example sem_layer_orders`

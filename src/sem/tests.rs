@@ -182,13 +182,14 @@ fn roller_mode_frequency_converges_exponentially_with_order() {
 }
 
 /// Orders 9 up to MAX_ORDER (the even-odd derivatives at their largest sizes, odd and even
-/// point counts) keep the roller mode's frequency at round-off (order 8 is at 1e-14 above;
-/// the derivative matrices' round-off grows about as n^2, so 1e-11 at 17 points).
+/// point counts) keep the roller mode's frequency at round-off, 1e-13 as order 8 above
+/// (measured 7.8e-16 to 4.7e-15).
 #[test]
 fn highest_orders_keep_the_roller_mode_at_round_off() {
     for order in 9..=MAX_ORDER {
         let error = roller_mode_frequency_error(order);
-        assert!(error < 1e-11, "order {order}: {error:e}");
+        eprintln!("order {order}: {error:.1e}");
+        assert!(error < 1e-13, "order {order}: {error:e}");
     }
 }
 
