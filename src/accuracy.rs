@@ -28,9 +28,52 @@ use crate::error::Result;
 use crate::signal::{self, Signal};
 use serde::{Deserialize, Serialize};
 
-/// Order of convergence of linear triangles with lumped mass and central differences
-/// (dispersion error O(h^2) in space and O(dt^2) in time, dt tied to h).
-pub const T3_ORDER: f64 = 2.0;
+/// How the two companions of an estimate are made from the main discretisation, which fixes
+/// the order of convergence the estimate expects.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Refinement {
+    /// Linear triangles at 2x and 4x the element sizes (h, 2h, 4h). With lumped mass and
+    /// central differences the dispersion error is O(h^2) in space and O(dt^2) in time, dt
+    /// tied to h: order 2.
+    ElementSizes,
+    /// Spectral elements on the same elements at orders p - 1 and p - 2 along x (at most as
+    /// many across). Their error falls exponentially with the order, e_p ~ C rho^p: the
+    /// formulas above hold with 2^-q = rho, the ratio per order, and d_1 / (2^q - 1) =
+    /// d_1 rho / (1 - rho) is the geometric tail. The estimate expects at least a halving per
+    /// order (order 1: then e_p <= d_1). The observed ratio of the two lower orders
+    /// understates the one at the top order (the error from the order across and the time
+    /// step does not fall with the order along x), so a faster observed rate gives the bound
+    /// d_1, which is what README "Error estimates of spectral elements" checks against a
+    /// converged reference.
+    Orders,
+}
+
+impl Refinement {
+    /// The order q the estimate expects: each refinement step divides the error by 2^q.
+    pub fn order(self) -> f64 {
+        match self {
+            Refinement::ElementSizes => 2.0,
+            Refinement::Orders => 1.0,
+        }
+    }
+
+    /// The two companions, as the messages name them.
+    pub fn companions(self) -> &'static str {
+        match self {
+            Refinement::ElementSizes => "2h and 4h",
+            Refinement::Orders => "orders p-1 and p-2",
+        }
+    }
+
+    /// The first companion, as the messages name it.
+    fn first_companion(self) -> &'static str {
+        match self {
+            Refinement::ElementSizes => "2h",
+            Refinement::Orders => "order p-1",
+        }
+    }
+}
 /// Largest |observed order - scheme order| for which an estimate is trusted.
 pub const ORDER_TOLERANCE: f64 = 0.5;
 /// Relative differences below this are round-off: the quantity does not depend on the mesh.
@@ -56,10 +99,12 @@ pub enum Verdict {
 pub struct Estimate {
     /// Whether this is a waveform's relative L2 error (true) or a scalar's error.
     pub waveform: bool,
+    /// How the companions were made.
+    pub refinement: Refinement,
     /// Value on the main discretisation (for a waveform: 0, the errors are relative).
     pub value: f64,
-    /// Values on the companions with 2x and 4x the element sizes (waveforms: the relative
-    /// differences d_1 = |y_h - y_2h| and d_2 = |y_2h - y_4h| over |y_h|).
+    /// Values on the two companions, 2h and 4h or orders p - 1 and p - 2 (waveforms: the
+    /// relative differences d_1 = |y_h - y_2h| and d_2 = |y_2h - y_4h| over |y_h|).
     pub companions: [f64; 2],
     /// Estimated |error| of `value` (waveforms: relative L2 error), or its upper bound;
     /// `None` when the runs are not in the asymptotic range.
@@ -72,29 +117,37 @@ pub struct Estimate {
 
 impl Estimate {
     /// Estimate for a scalar from its values at h, 2h, 4h (scheme order `order`).
-    pub fn scalar(fine: f64, medium: f64, coarse: f64, order: f64) -> Estimate {
+    pub fn scalar(fine: f64, medium: f64, coarse: f64, refinement: Refinement) -> Estimate {
         let scale = fine.abs().max(medium.abs()).max(coarse.abs());
-        Self::with_scale(fine, medium, coarse, scale, order)
+        Self::with_scale(fine, medium, coarse, scale, refinement)
     }
 
     /// Estimate for a dimensionless measure of order one (a misfit, a residual, an
     /// asymmetry): changes below 1e-10 in absolute terms are round-off, so a measure that is
     /// round-off at every resolution (a linear scene's misfit) is mesh-independent.
-    pub fn dimensionless(fine: f64, medium: f64, coarse: f64, order: f64) -> Estimate {
+    pub fn dimensionless(fine: f64, medium: f64, coarse: f64, refinement: Refinement) -> Estimate {
         let scale = fine.abs().max(medium.abs()).max(coarse.abs()).max(1.0);
-        Self::with_scale(fine, medium, coarse, scale, order)
+        Self::with_scale(fine, medium, coarse, scale, refinement)
     }
 
     /// A scalar whose differences change sign (Q_h - Q_2h against Q_2h - Q_4h) converges
     /// with oscillation, not as a power law: its verdict is "refine" whatever the ratio.
-    fn with_scale(fine: f64, medium: f64, coarse: f64, scale: f64, order: f64) -> Estimate {
+    fn with_scale(
+        fine: f64,
+        medium: f64,
+        coarse: f64,
+        scale: f64,
+        refinement: Refinement,
+    ) -> Estimate {
         let (d1, d2) = (fine - medium, medium - coarse);
-        let (mut error, observed_order, mut verdict) = classify(d1.abs(), d2.abs(), scale, order);
+        let (mut error, observed_order, mut verdict) =
+            classify(d1.abs(), d2.abs(), scale, refinement.order());
         if verdict != Verdict::MeshIndependent && d1 * d2 < 0.0 {
             (error, verdict) = (None, Verdict::Refine);
         }
         Estimate {
             waveform: false,
+            refinement,
             value: fine,
             companions: [medium, coarse],
             error,
@@ -110,7 +163,7 @@ impl Estimate {
         medium: &Signal,
         coarse: &Signal,
         window: (f64, f64),
-        order: f64,
+        refinement: Refinement,
     ) -> Result<Estimate> {
         let on_fine = |s: &Signal| -> Result<Signal> {
             let r = signal::resample(s, fine.dt_s)?;
@@ -136,9 +189,10 @@ impl Estimate {
         } else {
             (0.0, 0.0)
         };
-        let (error, observed_order, verdict) = classify(d1, d2, 1.0, order);
+        let (error, observed_order, verdict) = classify(d1, d2, 1.0, refinement.order());
         Ok(Estimate {
             waveform: true,
+            refinement,
             value: 0.0,
             companions: [d1, d2],
             error,
@@ -163,7 +217,8 @@ impl Estimate {
                 }
                 (Verdict::MeshIndependent, _) => "unchanged between meshes".into(),
                 _ => format!(
-                    "relative L2 error unknown (h vs 2h differ by {:.2e}, observed order {order}): refine",
+                    "relative L2 error unknown (differs from {} by {:.2e}, observed order {order}): refine",
+                    self.refinement.first_companion(),
                     self.companions[0]
                 ),
             };
@@ -182,8 +237,9 @@ impl Estimate {
                 format!("{:.4e} (unchanged between meshes)", self.value)
             }
             _ => format!(
-                "{:.4e} (error unknown, observed order {order}, change from 2h {:.2e}: refine)",
+                "{:.4e} (error unknown, observed order {order}, change from {} {:.2e}: refine)",
                 self.value,
+                self.refinement.first_companion(),
                 (self.value - self.companions[0]).abs()
             ),
         }
@@ -198,7 +254,11 @@ impl Estimate {
                 (Verdict::Reliable, Some(e)) => format!("err {}", pct(e)),
                 (Verdict::UpperBound, Some(e)) => format!("err < {}", pct(e)),
                 (Verdict::MeshIndependent, _) => "mesh-independent".into(),
-                _ => format!("err ? (2h: {})", pct(self.companions[0])),
+                _ => format!(
+                    "err ? ({}: {})",
+                    self.refinement.first_companion(),
+                    pct(self.companions[0])
+                ),
             };
         }
         let change = (self.value - self.companions[0]).abs();
@@ -211,7 +271,10 @@ impl Estimate {
             (Verdict::Reliable, Some(e)) => format!("{v} +- {e:.1e}"),
             (Verdict::UpperBound, Some(e)) => format!("{v} +- < {e:.1e}"),
             (Verdict::MeshIndependent, _) => format!("{v} (mesh-independent)"),
-            _ => format!("{v} (err ?, 2h: {change:.1e})"),
+            _ => format!(
+                "{v} (err ?, {}: {change:.1e})",
+                self.refinement.first_companion()
+            ),
         }
     }
 }
@@ -241,7 +304,7 @@ mod tests {
     fn power_law_gives_exact_richardson_error() {
         // Q_h = 1 + 0.3 h^2: at h = 0.1 the error is 3e-3 and the estimate exact.
         let q = |h: f64| 1.0 + 0.3 * h * h;
-        let e = Estimate::scalar(q(0.1), q(0.2), q(0.4), T3_ORDER);
+        let e = Estimate::scalar(q(0.1), q(0.2), q(0.4), Refinement::ElementSizes);
         assert_eq!(e.verdict, Verdict::Reliable);
         assert!((e.error.unwrap() - 3e-3).abs() < 1e-12);
         assert!((e.observed_order.unwrap() - 2.0).abs() < 1e-9);
@@ -250,7 +313,7 @@ mod tests {
     #[test]
     fn first_order_convergence_is_not_trusted_as_second() {
         let q = |h: f64| 1.0 + 0.3 * h;
-        let e = Estimate::scalar(q(0.1), q(0.2), q(0.4), T3_ORDER);
+        let e = Estimate::scalar(q(0.1), q(0.2), q(0.4), Refinement::ElementSizes);
         assert_eq!(e.verdict, Verdict::Refine);
         assert!(e.error.is_none());
         assert!((e.observed_order.unwrap() - 1.0).abs() < 1e-9);
@@ -260,21 +323,21 @@ mod tests {
     #[test]
     fn faster_convergence_gives_a_bound() {
         let q = |h: f64| 1.0 + 0.3 * h.powi(4);
-        let e = Estimate::scalar(q(0.1), q(0.2), q(0.4), T3_ORDER);
+        let e = Estimate::scalar(q(0.1), q(0.2), q(0.4), Refinement::ElementSizes);
         assert_eq!(e.verdict, Verdict::UpperBound);
         assert!(e.error.unwrap() > 0.3 * 0.1f64.powi(4));
     }
 
     #[test]
     fn oscillating_or_constant_sequences() {
-        let e = Estimate::scalar(1.0, 1.2, 1.0, T3_ORDER);
+        let e = Estimate::scalar(1.0, 1.2, 1.0, Refinement::ElementSizes);
         assert_eq!(e.verdict, Verdict::Refine);
         // Differences in the ratio of order 2 but of opposite signs: not a power law.
-        let sign_change = Estimate::scalar(1.0, 1.01, 0.97, T3_ORDER);
+        let sign_change = Estimate::scalar(1.0, 1.01, 0.97, Refinement::ElementSizes);
         assert_eq!(sign_change.verdict, Verdict::Refine);
-        let c = Estimate::scalar(0.5, 0.5, 0.5, T3_ORDER);
+        let c = Estimate::scalar(0.5, 0.5, 0.5, Refinement::ElementSizes);
         assert_eq!(c.verdict, Verdict::MeshIndependent);
-        let z = Estimate::scalar(0.0, 0.0, 0.0, T3_ORDER);
+        let z = Estimate::scalar(0.0, 0.0, 0.0, Refinement::ElementSizes);
         assert_eq!(z.verdict, Verdict::MeshIndependent);
     }
 
@@ -294,7 +357,7 @@ mod tests {
         };
         let shift = |h: f64| 2e-9 * h * h;
         let (f, m, c) = (pulse(shift(1.0)), pulse(shift(2.0)), pulse(shift(4.0)));
-        let e = Estimate::waveform(&f, &m, &c, (0.0, 4e-6), T3_ORDER).unwrap();
+        let e = Estimate::waveform(&f, &m, &c, (0.0, 4e-6), Refinement::ElementSizes).unwrap();
         let exact = pulse(0.0);
         let truth = signal::relative_l2(&f, &exact, None).unwrap();
         assert_eq!(e.verdict, Verdict::Reliable, "{e:?}");

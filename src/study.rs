@@ -3,13 +3,13 @@
 //! solution is v(t, d) = -p(t - d/c) / (rho c), and the choice of a resolution
 //! for a requested accuracy on any scene ([`resolution_for_tolerance`]).
 
-use crate::accuracy::{Estimate, T3_ORDER};
+use crate::accuracy::{Estimate, Refinement};
 use crate::error::{require_positive, Error, Result};
 use crate::fem::Model;
 use crate::laminate::Laminate;
 use crate::material::{Material, Orthotropic, Plane};
 use crate::mesh::{Mesh, Side};
-use crate::scene::{Scene, SceneSpec};
+use crate::scene::{DiscretisationSpec, Scene, SceneSpec};
 use crate::sem::SemModel;
 use crate::signal::Signal;
 use crate::solve::{
@@ -417,6 +417,17 @@ pub fn resolution_for_tolerance(
             "must be a relative error between 0 and 1",
         ));
     }
+    if let DiscretisationSpec::Sem { order_x, .. } = spec.discretisation {
+        return Err(Error::invalid(
+            "tolerance",
+            tolerance,
+            format!(
+                "refines the element sizes of linear triangles (discretisation kind \"t3\"); \
+                 spectral elements (order_x = {order_x}) are refined by their order: raise \
+                 discretisation.order_x and check with error_estimate = true"
+            ),
+        ));
+    }
     let pilot = |factor: f64| -> Result<(Vec<Signal>, f64)> {
         let scene = Arc::new(Scene::build(&spec.coarsened(factor)?.uncracked())?);
         let r = Responder::new(scene, chirp.record_s + 1e-6)?;
@@ -434,7 +445,13 @@ pub fn resolution_for_tolerance(
         let (mut d1, mut d2) = (0.0f64, 0.0f64);
         for k in 0..fine.0.len() {
             let window = (0.0, chirp.record_s);
-            let e = Estimate::waveform(&fine.0[k], &medium.0[k], &coarse.0[k], window, T3_ORDER)?;
+            let e = Estimate::waveform(
+                &fine.0[k],
+                &medium.0[k],
+                &coarse.0[k],
+                window,
+                Refinement::ElementSizes,
+            )?;
             d1 = d1.max(e.companions[0]);
             d2 = d2.max(e.companions[1]);
         }
@@ -455,7 +472,9 @@ pub fn resolution_for_tolerance(
         finest *= 0.5;
     };
     let time = levels[levels.len() - 1].1;
-    let order = (d2 / d1).log2().clamp(1.0, T3_ORDER);
+    let order = (d2 / d1)
+        .log2()
+        .clamp(1.0, Refinement::ElementSizes.order());
     let error_at_finest = d1 / (2f64.powf(order) - 1.0);
     let mut factor = finest;
     while error_at_finest * (factor / finest).powf(order) > tolerance {

@@ -14,7 +14,7 @@
 //! so every measure below (focus, side lobes, PI, delayed misfit) is in the transducer band.
 //! For a linear scene B * (h * (B * s)) is formed from the raw impulse response h.
 
-use crate::accuracy::{Estimate, T3_ORDER};
+use crate::accuracy::{Estimate, Refinement};
 use crate::error::{require_positive, Error, Result};
 use crate::scene::{Resolution, Scene};
 use crate::signal::{self, ChirpSpec, Peak, SideLobes, Signal};
@@ -320,6 +320,11 @@ impl Responder {
         }
     }
 
+    /// How the companions refine this responder's scene.
+    pub fn refinement(&self) -> Result<Refinement> {
+        Ok(self.scene()?.spec.refinement())
+    }
+
     /// Peak of the transmitted drive signals: the scene transmitter's peak traction (Pa), or
     /// a measured channel's drive peak.
     pub fn peak_drive(&self) -> f64 {
@@ -371,16 +376,20 @@ impl Responder {
             .collect()
     }
 
-    /// The scenes of an error estimate's companions: this scene (same laminate draw) with 2x
-    /// and 4x the element sizes, each with its own stable step, and their run time relative
-    /// to this responder's from DOFs x steps, sum over companions of (DOFs_c / DOFs)
-    /// (dt / dt_c). About 1/8 + 1/64 where every layer coarsens, more where thin layers keep
-    /// one element row or set the step. Building them runs no simulation.
+    /// The scenes of an error estimate's companions ([`SceneSpec::companions`]: on linear
+    /// triangles 2x and 4x the element sizes, on spectral elements one and two orders lower),
+    /// each with its own stable step, and their run time relative to this responder's from
+    /// DOFs x steps, sum over companions of (DOFs_c / DOFs) (dt / dt_c). On triangles about
+    /// 1/8 + 1/64 where every layer coarsens, more where thin layers keep one element row or
+    /// set the step; on the order-7 spectral elements of the presets about 0.95. Building
+    /// them runs no simulation.
     pub fn companion_scenes(&self) -> Result<(Vec<Arc<Scene>>, f64)> {
         let scene = self.scene()?;
-        let scenes = [2.0, 4.0]
-            .into_iter()
-            .map(|factor| Ok(Arc::new(Scene::build(&scene.spec.coarsened(factor)?)?)))
+        let scenes = scene
+            .spec
+            .companions()?
+            .iter()
+            .map(|spec| Ok(Arc::new(Scene::build(spec)?)))
             .collect::<Result<Vec<_>>>()?;
         let work = |s: &Scene, dt: f64| s.dofs() as f64 / dt;
         let cost = scenes
@@ -833,8 +842,9 @@ fn tr_news_computed(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> 
         .map(|c| tr_news_once(c, spec))
         .collect::<Result<_>>()?;
     if let [medium, coarse] = &main.companions[..] {
+        let refinement = responder.refinement()?;
         let estimates = (0..main.focus.len())
-            .map(|i| focus_estimates(&main, medium, coarse, i))
+            .map(|i| focus_estimates(&main, medium, coarse, i, refinement))
             .collect::<Result<Vec<_>>>()?;
         for (f, e) in main.focus.iter_mut().zip(estimates) {
             f.estimates = Some(e);
@@ -843,15 +853,17 @@ fn tr_news_computed(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> 
     Ok(main)
 }
 
-/// The estimates of focus `i` from the runs at h, 2h, 4h.
+/// The estimates of focus `i` from the main run and its two companions.
 fn focus_estimates(
     fine: &TrNews,
     medium: &TrNews,
     coarse: &TrNews,
     i: usize,
+    refinement: Refinement,
 ) -> Result<FocusEstimates> {
     let f = [&fine.focus[i], &medium.focus[i], &coarse.focus[i]];
-    let scalar = |q: &dyn Fn(&Focus) -> f64| Estimate::scalar(q(f[0]), q(f[1]), q(f[2]), T3_ORDER);
+    let scalar =
+        |q: &dyn Fn(&Focus) -> f64| Estimate::scalar(q(f[0]), q(f[1]), q(f[2]), refinement);
     let spec = &fine.spec;
     let r = f[0].receiver - 1;
     let focus_window = (
@@ -864,14 +876,14 @@ fn focus_estimates(
             &medium.responses[r],
             &coarse.responses[r],
             (0.0, spec.record_s),
-            T3_ORDER,
+            refinement,
         )?,
         focused: Estimate::waveform(
             &f[0].focused,
             &f[1].focused,
             &f[2].focused,
             focus_window,
-            T3_ORDER,
+            refinement,
         )?,
         peak_amplitude: scalar(&|x| x.peak.amplitude),
         peak_time_s: scalar(&|x| x.peak.time_s),
@@ -879,11 +891,11 @@ fn focus_estimates(
             f[0].side_lobes.asymmetry,
             f[1].side_lobes.asymmetry,
             f[2].side_lobes.asymmetry,
-            T3_ORDER,
+            refinement,
         ),
         main_to_side_db: scalar(&|x| x.side_lobes.main_to_side_db),
         pi_residual: match f.map(Focus::pi_residual) {
-            [Some(a), Some(b), Some(c)] => Some(Estimate::dimensionless(a, b, c, T3_ORDER)),
+            [Some(a), Some(b), Some(c)] => Some(Estimate::dimensionless(a, b, c, refinement)),
             _ => None,
         },
     })
@@ -1093,21 +1105,22 @@ pub fn delayed_tr_news_within(
         delayed_once(r, t, f, points, half_window_s, max_delay_s)
     };
     let (medium, coarse) = (on(rm, tm)?, on(rc, tc)?);
+    let refinement = responder.refinement()?;
     for ((d, m), c) in main.iter_mut().zip(&medium).zip(&coarse) {
         d.estimates = Some(DelayedEstimates {
-            misfit: Estimate::dimensionless(d.misfit, m.misfit, c.misfit, T3_ORDER),
+            misfit: Estimate::dimensionless(d.misfit, m.misfit, c.misfit, refinement),
             peak_difference: Estimate::dimensionless(
                 d.peak_difference,
                 m.peak_difference,
                 c.peak_difference,
-                T3_ORDER,
+                refinement,
             ),
             simulation: Estimate::waveform(
                 &d.simulation,
                 &m.simulation,
                 &c.simulation,
                 d.window_s,
-                T3_ORDER,
+                refinement,
             )?,
         });
     }
@@ -1220,9 +1233,10 @@ pub fn pulse_inversion(
         let fine = main.residuals();
         let m = pulse_inversion_once(medium, s, duration_s)?.residuals();
         let c = pulse_inversion_once(coarse, s, duration_s)?.residuals();
+        let refinement = responder.refinement()?;
         main.residual_estimates = Some(
             (0..fine.len())
-                .map(|k| Estimate::dimensionless(fine[k], m[k], c[k], T3_ORDER))
+                .map(|k| Estimate::dimensionless(fine[k], m[k], c[k], refinement))
                 .collect(),
         );
     }

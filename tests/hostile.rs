@@ -166,8 +166,17 @@ fn open_scene_inputs_are_errors_naming_the_field() {
             "no data directory",
         ),
     ];
-    for (overrides, needle) in &cases {
-        let script = format!("scene::preset(\"smoke\", {overrides});");
+    // Every case on both discretisations, but for a source segment between two nodes: spectral
+    // elements integrate their polynomials over any part of a side exactly, so there it is a
+    // valid load.
+    let on_both = cases
+        .iter()
+        .flat_map(|c| ["t3", "sem"].map(|kind| (kind, c)));
+    for (kind, (overrides, needle)) in on_both {
+        if kind == "sem" && *needle == "fewer than two mesh nodes" {
+            continue;
+        }
+        let script = format!("scene::preset(\"smoke\", \"{kind}\", {overrides});");
         let err = run(&dir.0, &script).unwrap_or_else(|| panic!("ran without error: {script}"));
         assert!(err.starts_with("t.rhai:1:"), "no position: {err}");
         assert!(

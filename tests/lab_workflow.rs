@@ -25,7 +25,7 @@ use std::sync::Arc;
 use trnews::lab::{
     RecordingFiles, ToRecordManifest, LAB_MANIFEST, TO_RECORD_DIR, TO_RECORD_MANIFEST,
 };
-use trnews::scene::{Scene, SceneSpec};
+use trnews::scene::{Resolution, Scene, SceneSpec};
 use trnews::signal::Signal;
 use trnews::trnews::Responder;
 
@@ -96,7 +96,7 @@ struct Lab {
 
 /// The cracked smoke scene, simulating every drive.
 fn cracked_smoke() -> Responder {
-    let scene = Scene::build(&SceneSpec::smoke()).expect("cracked smoke scene");
+    let scene = Scene::build(&SceneSpec::preset(Resolution::Smoke)).expect("cracked smoke scene");
     Responder::simulating(Arc::new(scene))
 }
 
@@ -170,7 +170,8 @@ fn lab_workflow(name: &str, sim: &Responder, tmp: &TempDir) -> (PathBuf, Vec<usi
 /// Writes the uncracked smoke scene's impulse response (40 us, transducers included) as
 /// `data/h.npy`, one row per receiver.
 fn write_impulse(sim: &Responder, data: &Path) {
-    let scene = Scene::build(&SceneSpec::smoke().uncracked()).expect("uncracked scene");
+    let scene =
+        Scene::build(&SceneSpec::preset(Resolution::Smoke).uncracked()).expect("uncracked scene");
     let linear = Responder::new(Arc::new(scene), 40e-6).expect("impulse response");
     let unit = Signal::new(sim.dt_s(), 0.0, vec![1.0]).expect("unit");
     let h = linear.respond(&unit, 40e-6).expect("h").traces;
@@ -199,6 +200,21 @@ fn close(a: &str, b: &str, rel: f64) -> bool {
     (x - y).abs() <= rel * x.abs().max(y.abs())
 }
 
+/// Rows of a recorded run and of the scene's run agree: every field equal, numbers to 1e-9
+/// relative. The lab plays the drives on its own simulation of the scene; on spectral
+/// elements the results differ from the scene channel's in the last digits (measured up to
+/// 1e-11 relative), which round-off explains and a wrong recording (a drive, a receiver or a
+/// sample off) would exceed by orders of magnitude.
+fn same_rows(a: &[Vec<String>], b: &[Vec<String>]) -> bool {
+    let field = |x: &String, y: &String| {
+        x == y || (x.parse::<f64>().is_ok() && y.parse::<f64>().is_ok() && close(x, y, 1e-9))
+    };
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(r, s)| r.len() == s.len() && r.iter().zip(s).all(|(x, y)| field(x, y)))
+}
+
 #[test]
 fn sweep_delays_runs_on_recorded_lab_data_and_on_a_measured_impulse_response() {
     let tmp = TempDir::new("lab-sweep");
@@ -218,10 +234,9 @@ fn sweep_delays_runs_on_recorded_lab_data_and_on_a_measured_impulse_response() {
         // energy_residual_peak and dt_over_dt_crit come from run reports: none recorded
         assert_eq!((r[6].as_str(), r[7].as_str()), ("", ""));
         let strip = |row: &Vec<String>| [&row[..6], &row[8..]].concat();
-        assert_eq!(
-            strip(r),
-            strip(s),
-            "recorded point differs from the scene's"
+        assert!(
+            same_rows(&[strip(r)], &[strip(s)]),
+            "recorded point differs from the scene's: {r:?} vs {s:?}"
         );
     }
 
@@ -254,10 +269,11 @@ fn trnews_focus_runs_on_recorded_lab_data_and_on_a_measured_impulse_response() {
         "the chirp; the focusing drives at the 4 receivers"
     );
     assert_eq!(csv(&table(&out)).0, csv(&table(&reference)).0, "header");
-    assert_eq!(
+    let (recorded, scene) = (
         csv(&table(&out)).1,
-        rows_where(&table(&reference), 0, "cracked")
+        rows_where(&table(&reference), 0, "cracked"),
     );
+    assert!(same_rows(&recorded, &scene), "{recorded:?}\n vs {scene:?}");
     assert!(!out.join("plots/trnews_snapshot.png").exists(), "no field");
 
     let measured = on_impulse("trnews_focus", &sim, &tmp);
@@ -301,8 +317,11 @@ fn pulse_inversion_runs_on_recorded_lab_data_and_on_a_measured_impulse_response(
     assert_eq!(header.len(), 7, "{header:?}");
     assert_eq!(rows.len(), scene_rows.len());
     for (r, s) in rows.iter().zip(&scene_rows) {
-        let picked: Vec<&String> = columns.iter().map(|&c| &s[c]).collect();
-        assert_eq!(r.iter().collect::<Vec<_>>(), picked);
+        let picked: Vec<String> = columns.iter().map(|&c| s[c].clone()).collect();
+        assert!(
+            same_rows(std::slice::from_ref(r), std::slice::from_ref(&picked)),
+            "{r:?} vs {picked:?}"
+        );
     }
 
     let measured = on_impulse("pulse_inversion", &sim, &tmp);

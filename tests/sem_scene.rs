@@ -234,6 +234,50 @@ fn bad_sem_scenes_are_errors_naming_the_field() {
     assert!(e.contains("discretisation.kind") && e.contains("t3"), "{e}");
 }
 
+/// The companions of a spectral-element scene's error estimate lower the order along x by
+/// one and two on the same elements (and the order across to at most that), keep the
+/// laminate draw, and are refused below order 3 with an error naming the field.
+#[test]
+fn sem_companions_lower_the_order_and_keep_the_elements() {
+    use trnews::accuracy::Refinement;
+    use trnews::scene::{DiscretisationKind, Resolution};
+    let spec = SceneSpec::preset(Resolution::Quick);
+    assert_eq!(spec.refinement(), Refinement::Orders);
+    let orders = spec.companions().unwrap().map(|c| {
+        let same_otherwise = SceneSpec {
+            discretisation: c.discretisation,
+            ..spec.clone()
+        };
+        assert_eq!(c, same_otherwise);
+        c.discretisation
+    });
+    let expected = [(6, 3), (5, 3)].map(|(order_x, max_order_y)| DiscretisationSpec::Sem {
+        order_x,
+        max_order_y,
+    });
+    assert_eq!(orders, expected);
+    let low = SceneSpec {
+        discretisation: sem(4),
+        ..spec.clone()
+    };
+    assert_eq!(low.companions().unwrap()[1].discretisation, sem(2));
+    let e = SceneSpec {
+        discretisation: sem(2),
+        ..spec
+    }
+    .companions()
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("discretisation.order_x") && e.contains('2'),
+        "{e}"
+    );
+    let t3 = SceneSpec::preset_on(Resolution::Quick, DiscretisationKind::T3);
+    assert_eq!(t3.refinement(), Refinement::ElementSizes);
+    let coarse = t3.companions().unwrap();
+    assert_eq!(coarse[1].element_size_x_m, 4.0 * t3.element_size_x_m);
+}
+
 /// Newmark (average acceleration on the assembled K, springs included) on the uncracked SEM
 /// smoke scene against central differences on the same scene: both are second order in dt,
 /// so at 0.2 and 0.1 dt_crit their receiver traces differ by a relative L2 distance that

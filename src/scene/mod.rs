@@ -3,6 +3,7 @@
 //! (report Sec. 5.1, Fig. 14). A scene builds only what it names: no crack means no contact
 //! pairs, no absorbing side means no dashpots.
 
+use crate::accuracy::Refinement;
 use crate::contact::ContactOptions;
 use crate::error::{require_positive, Error, Result};
 use crate::fem::{AbsorbingEdge, Model};
@@ -473,7 +474,7 @@ impl std::str::FromStr for DiscretisationKind {
     }
 }
 
-/// Spectral elements of a resolution preset: element sizes and the order (along x, and the
+/// Spectral elements of a resolution preset: element sizes and the orders (along x, and the
 /// most across y).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SemPreset {
@@ -481,22 +482,27 @@ pub struct SemPreset {
     pub element_size_x_m: f64,
     /// Largest element height (m).
     pub element_size_y_m: f64,
-    /// Polynomial order.
-    pub order: usize,
+    /// Polynomial order along x.
+    pub order_x: usize,
+    /// Highest polynomial order across an element row.
+    pub max_order_y: usize,
 }
 
 impl SemPreset {
-    /// The spectral elements of each resolution (README "Spectral elements" gives the
-    /// accuracy and run time measured for them).
+    /// The spectral elements of each resolution, chosen on the default experiment against a
+    /// converged reference (README "Spectral elements"): quick (and smoke) order 7 along x on
+    /// 0.5 mm elements with at most order 3 across, within 2% at about 2x the run time of
+    /// the T3 quick scene; paper order 6 on 0.25 mm, within 0.3%.
     pub fn of(resolution: Resolution) -> SemPreset {
-        let (size, order) = match resolution {
-            Resolution::Smoke | Resolution::Quick => (0.25e-3, 4),
-            Resolution::Paper => (0.125e-3, 4),
+        let (size, order_x, max_order_y) = match resolution {
+            Resolution::Smoke | Resolution::Quick => (0.5e-3, 7, 3),
+            Resolution::Paper => (0.25e-3, 6, 6),
         };
         SemPreset {
             element_size_x_m: size,
             element_size_y_m: size,
-            order,
+            order_x,
+            max_order_y,
         }
     }
 }
@@ -525,6 +531,9 @@ pub enum DiscretisationSpec {
     },
 }
 
+/// The report's default scene on its own linear triangles, 60 x 40 um: the `quick` preset on
+/// T3 ([`SceneSpec::preset_on`]; the experiments' `quick` preset is this scene on spectral
+/// elements).
 impl Default for SceneSpec {
     fn default() -> Self {
         SceneSpec {
@@ -592,20 +601,23 @@ impl SceneSpec {
         }
     }
 
-    /// The scene of a resolution preset.
+    /// The scene of a resolution preset on its default discretisation, the spectral
+    /// elements of [`SemPreset::of`] (they met the accuracy target on measurement; README
+    /// "Spectral elements").
     pub fn preset(resolution: Resolution) -> SceneSpec {
-        match resolution {
+        SceneSpec::preset_on(resolution, DiscretisationKind::Sem)
+    }
+
+    /// The scene of a resolution preset on the discretisation `kind`: for T3 the scene's own
+    /// triangles ([`SceneSpec::default`], [`SceneSpec::paper`], [`SceneSpec::smoke`]); for
+    /// spectral elements the same scene with the element sizes and orders of
+    /// [`SemPreset::of`].
+    pub fn preset_on(resolution: Resolution, kind: DiscretisationKind) -> SceneSpec {
+        let t3 = match resolution {
             Resolution::Quick => SceneSpec::default(),
             Resolution::Paper => SceneSpec::paper(),
             Resolution::Smoke => SceneSpec::smoke(),
-        }
-    }
-
-    /// The scene of a resolution preset on the discretisation `kind`: the preset itself for
-    /// T3; for spectral elements the same scene with the element sizes and orders of
-    /// [`SemPreset::of`].
-    pub fn preset_on(resolution: Resolution, kind: DiscretisationKind) -> SceneSpec {
-        let t3 = SceneSpec::preset(resolution);
+        };
         match kind {
             DiscretisationKind::T3 => t3,
             DiscretisationKind::Sem => {
@@ -614,8 +626,8 @@ impl SceneSpec {
                     element_size_x_m: p.element_size_x_m,
                     element_size_y_m: p.element_size_y_m,
                     discretisation: DiscretisationSpec::Sem {
-                        order_x: p.order,
-                        max_order_y: p.order,
+                        order_x: p.order_x,
+                        max_order_y: p.max_order_y,
                     },
                     ..t3
                 }
@@ -623,9 +635,49 @@ impl SceneSpec {
         }
     }
 
+    /// The two companions of an error estimate (the same laminate draw;
+    /// [`SceneSpec::refinement`]): on linear triangles the scene at 2x and 4x
+    /// the element sizes; on spectral elements the same elements at orders `order_x` - 1 and
+    /// `order_x` - 2 along x, at most that many across (a coarser element would leave the
+    /// asymptotic range at once: a halving of h changes an order-7 error by 2^14).
+    pub fn companions(&self) -> Result<[SceneSpec; 2]> {
+        match self.discretisation {
+            DiscretisationSpec::T3 => Ok([self.coarsened(2.0)?, self.coarsened(4.0)?]),
+            DiscretisationSpec::Sem {
+                order_x,
+                max_order_y,
+            } => {
+                if order_x < 3 {
+                    return Err(Error::invalid(
+                        "discretisation.order_x",
+                        order_x,
+                        "error estimates on spectral elements compare orders p, p - 1 and \
+                         p - 2: they need order_x >= 3",
+                    ));
+                }
+                let lowered = |by: usize| SceneSpec {
+                    discretisation: DiscretisationSpec::Sem {
+                        order_x: order_x - by,
+                        max_order_y: max_order_y.min(order_x - by),
+                    },
+                    ..self.clone()
+                };
+                Ok([lowered(1), lowered(2)])
+            }
+        }
+    }
+
+    /// How [`SceneSpec::companions`] refine this scene.
+    pub fn refinement(&self) -> Refinement {
+        match self.discretisation {
+            DiscretisationSpec::T3 => Refinement::ElementSizes,
+            DiscretisationSpec::Sem { .. } => Refinement::Orders,
+        }
+    }
+
     /// The same scene (same laminate draw) with element sizes multiplied by `factor`: the
-    /// companions of an error estimate ([`crate::accuracy`]). A Gmsh scene has no element
-    /// sizes to change (its mesh is the file's): an error.
+    /// companions of an error estimate on linear triangles and the pilots of a tolerance. A
+    /// Gmsh scene has no element sizes to change (its mesh is the file's): an error.
     pub fn coarsened(&self, factor: f64) -> Result<SceneSpec> {
         if let Some(g) = &self.gmsh {
             return Err(Error::invalid(
@@ -1325,8 +1377,19 @@ fn crack_geometry(spec: &SceneSpec, c: &CrackSpec, height: f64) -> Result<(f64, 
 
 /// The condition of every edge, in the order bottom, top, left, right: `edges` where it
 /// names one, else absorbing if `absorbing` lists the side, else free. Periodic must be
-/// given to the left and right edges together and to no other.
+/// given to the left and right edges together and to no other; a side listed twice in
+/// `absorbing` is an error (it would absorb twice).
 fn edge_conditions(spec: &SceneSpec) -> Result<[(Side, EdgeCondition); 4]> {
+    let listed = &spec.absorbing;
+    if let Some(twice) =
+        (1..listed.len()).find_map(|i| listed[..i].contains(&listed[i]).then_some(listed[i]))
+    {
+        return Err(Error::invalid(
+            "absorbing",
+            format!("{twice:?}").to_lowercase(),
+            "is listed twice (it would absorb twice)",
+        ));
+    }
     let e = &spec.edges;
     let conditions = [
         (Side::Bottom, e.bottom),

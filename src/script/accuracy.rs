@@ -18,8 +18,9 @@ pub fn module() -> Module {
 
 #[export_module]
 mod accuracy_api {
-    use crate::accuracy::{Estimate, Verdict, T3_ORDER};
+    use crate::accuracy::{Estimate, Refinement, Verdict};
     use crate::script::convert::WithPosition;
+    use crate::script::scene::SceneRef;
     use crate::signal::Signal;
     use rhai::{Array, Dynamic, NativeCallContext, FLOAT};
 
@@ -27,12 +28,18 @@ mod accuracy_api {
 
     /// Richardson estimate of a dimensional scalar from its values at element sizes h, 2h, 4h (T3 order 2).
     pub fn scalar(fine: FLOAT, medium: FLOAT, coarse: FLOAT) -> Estimate {
-        Estimate::scalar(fine, medium, coarse, T3_ORDER)
+        Estimate::scalar(fine, medium, coarse, Refinement::ElementSizes)
+    }
+
+    /// Estimate of a dimensional scalar from its values on `scene` and on its two `scene.companions()` (2h and 4h on triangles, orders p - 1 and p - 2 on spectral elements).
+    #[rhai_fn(name = "scalar")]
+    pub fn scalar_of(fine: FLOAT, medium: FLOAT, coarse: FLOAT, scene: SceneRef) -> Estimate {
+        Estimate::scalar(fine, medium, coarse, scene.spec.refinement())
     }
 
     /// Richardson estimate of a dimensionless measure of order one (misfit, residual, asymmetry) at h, 2h, 4h; changes below 1e-10 are round-off.
     pub fn dimensionless(fine: FLOAT, medium: FLOAT, coarse: FLOAT) -> Estimate {
-        Estimate::dimensionless(fine, medium, coarse, T3_ORDER)
+        Estimate::dimensionless(fine, medium, coarse, Refinement::ElementSizes)
     }
 
     /// Richardson estimate of the relative L2 error of the trace `fine` over t_start_s..t_end_s from the same trace at 2h (`medium`) and 4h (`coarse`), resampled to the fine step.
@@ -45,7 +52,40 @@ mod accuracy_api {
         t_start_s: FLOAT,
         t_end_s: FLOAT,
     ) -> Res<Estimate> {
-        Estimate::waveform(&fine, &medium, &coarse, (t_start_s, t_end_s), T3_ORDER).at(&ctx)
+        Estimate::waveform(
+            &fine,
+            &medium,
+            &coarse,
+            (t_start_s, t_end_s),
+            Refinement::ElementSizes,
+        )
+        .at(&ctx)
+    }
+
+    /// Estimate of a dimensionless measure of order one from its values on `scene` and on its two `scene.companions()`; changes below 1e-10 are round-off.
+    #[rhai_fn(name = "dimensionless")]
+    pub fn dimensionless_of(
+        fine: FLOAT,
+        medium: FLOAT,
+        coarse: FLOAT,
+        scene: SceneRef,
+    ) -> Estimate {
+        Estimate::dimensionless(fine, medium, coarse, scene.spec.refinement())
+    }
+
+    /// Estimate of the relative L2 error of the trace `fine` over t_start_s..t_end_s, recorded on `scene`, from the same trace on its two `scene.companions()` (`medium`, `coarse`), resampled to the fine step.
+    #[rhai_fn(name = "waveform", return_raw)]
+    pub fn waveform_of(
+        ctx: NativeCallContext,
+        fine: Signal,
+        medium: Signal,
+        coarse: Signal,
+        t_start_s: FLOAT,
+        t_end_s: FLOAT,
+        scene: SceneRef,
+    ) -> Res<Estimate> {
+        let refinement = scene.spec.refinement();
+        Estimate::waveform(&fine, &medium, &coarse, (t_start_s, t_end_s), refinement).at(&ctx)
     }
 
     /// Value on the main discretisation (0 for a waveform, whose error is relative).
@@ -66,7 +106,7 @@ mod accuracy_api {
         e.observed_order.map_or(Dynamic::UNIT, Dynamic::from)
     }
 
-    /// Values on the companions [2h, 4h] (waveforms: relative differences [h vs 2h, 2h vs 4h]).
+    /// Values on the two companions, [2h, 4h] or [order p - 1, order p - 2] (waveforms: relative differences [main vs first, first vs second]).
     #[rhai_fn(global, get = "companions", pure)]
     pub fn companions(e: &mut Estimate) -> Array {
         e.companions.iter().map(|&v| Dynamic::from(v)).collect()

@@ -85,26 +85,26 @@ mod scene_api {
 
     type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
 
-    /// The default scene (the report's configuration, quick resolution) as a map of every field.
+    /// The default scene (the report's configuration on its linear triangles, 60 x 40 um) as a map of every field.
     #[rhai_fn(return_raw)]
     pub fn default_spec(ctx: NativeCallContext) -> Res<Dynamic> {
         to_dynamic(&ctx, &SceneSpec::default())
     }
 
-    /// Builds the default scene with the fields of `overrides` replaced (unknown fields are errors); `crack: ()` removes the crack.
+    /// Builds the default scene (the report's configuration on its linear triangles, 60 x 40 um; `preset("quick", overrides)` is the same scene on the experiments' spectral elements) with the fields of `overrides` replaced (unknown fields are errors); `crack: ()` removes the crack.
     #[rhai_fn(return_raw)]
     pub fn build(ctx: NativeCallContext, overrides: Map) -> Res<SceneRef> {
         super::build(&ctx, overrides, SceneSpec::default())
     }
 
-    /// Builds a preset scene, "quick" (the default), "paper" (20 um x 10 um elements) or "smoke" (a small fast scene for tests), with `overrides`.
+    /// Builds a preset scene, "quick" (the default), "paper" or "smoke" (a small fast scene for tests), with `overrides`, on its default discretisation: spectral elements (quick and smoke: order 7 along x on 0.5 mm elements, at most order 3 across; paper: order 6 on 0.25 mm; README "Spectral elements"). `preset(name, "t3", overrides)` gives the report's triangles.
     #[rhai_fn(return_raw)]
     pub fn preset(ctx: NativeCallContext, name: &str, overrides: Map) -> Res<SceneRef> {
         let base = SceneSpec::preset(name.parse().at(&ctx)?);
         super::build(&ctx, overrides, base)
     }
 
-    /// Builds a preset scene (as `preset(name, overrides)`) on the discretisation `kind`: "t3" (the preset's triangles) or "sem" (spectral elements of the sizes and orders that go with the resolution; README "Spectral elements").
+    /// Builds a preset scene (as `preset(name, overrides)`) on the discretisation `kind`: "sem" (the default: spectral elements of the sizes and orders that go with the resolution; README "Spectral elements") or "t3" (the report's linear triangles: 60 x 40 um for quick, 20 x 10 um for paper, 80 x 40 um for smoke).
     #[rhai_fn(name = "preset", return_raw)]
     pub fn preset_on(
         ctx: NativeCallContext,
@@ -153,6 +153,21 @@ mod scene_api {
         Ok(Arc::new(
             crate::scene::Scene::build(&scene.spec.uncracked()).at(&ctx)?,
         ))
+    }
+
+    /// The two companions of an error estimate (same laminate draw): on linear triangles the scene at 2x and 4x the element sizes, on spectral elements the same elements at orders order_x - 1 and order_x - 2. Estimate a quantity from its values on the scene and on them with `accuracy::scalar(fine, medium, coarse, scene)`.
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn companions(ctx: NativeCallContext, scene: &mut SceneRef) -> Res<Array> {
+        scene
+            .spec
+            .companions()
+            .at(&ctx)?
+            .iter()
+            .map(|spec| {
+                let built = crate::scene::Scene::build(spec).at(&ctx)?;
+                Ok(Dynamic::from(Arc::new(built)))
+            })
+            .collect()
     }
 
     /// Degrees of freedom of the scene's model.

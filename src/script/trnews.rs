@@ -44,9 +44,10 @@ impl Default for EstimateChoice {
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ResponderOptions {
-    /// Repeat every procedure on companions with 2x and 4x the element sizes and report
-    /// Richardson error estimates (see `accuracy`): true, false, or "auto" (on when the
-    /// companions cost at most 15% of the main runs).
+    /// Repeat every procedure on the scene's two companions (2x and 4x the element sizes on
+    /// triangles, one and two orders lower on spectral elements) and report error estimates
+    /// (see `accuracy`): true, false, or "auto" (on when the companions cost at most 15% of
+    /// the main runs).
     pub error_estimate: EstimateChoice,
     /// The time step as a fraction of the scene's dt_crit, in (0, 1]: below the default 0.9
     /// to measure or shrink the central-difference time error (O(dt^2)).
@@ -85,9 +86,10 @@ fn companions_wanted(
                 return Ok(Some(scenes));
             }
             crate::script::HostContext::of(ctx)?.print(&format!(
-                "error estimate off: the 2h and 4h companions would add {:.0}% to the run \
+                "error estimate off: the companions at {} would add {:.0}% to the run \
                  time (auto allows {:.0}%); results carry no discretisation error \
                  (error_estimate = true turns it on)",
+                r.refinement().at(ctx)?.companions(),
                 100.0 * cost,
                 100.0 * AUTO_ESTIMATE_MAX_COST
             ));
@@ -733,7 +735,7 @@ mod trnews_api {
         Ok(tr.responses[index(&ctx, k, tr.responses.len(), "receiver")?].clone())
     }
 
-    /// A responder with options #{error_estimate, step_fraction}: `step_fraction` sets the time step to that fraction of the scene's dt_crit (default 0.9); with `error_estimate: true` (or "auto" when that costs at most 15% extra) it also builds the scene with 2x and 4x the element sizes (same laminate draw), repeats every procedure on them (about 1/8 + 1/64 of the cost where every layer coarsens) and attaches Richardson error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
+    /// A responder with options #{error_estimate, step_fraction}: `step_fraction` sets the time step to that fraction of the scene's dt_crit (default 0.9); with `error_estimate: true` (or "auto" when that costs at most 15% extra) it also builds the scene's two companions (same laminate draw; on triangles 2x and 4x the element sizes, about 1/8 + 1/64 of the cost where every layer coarsens; on spectral elements one and two orders lower, about 0.95 of the cost at order 7), repeats every procedure on them and attaches error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
     #[rhai_fn(name = "responder", return_raw)]
     pub fn responder_with(
         ctx: NativeCallContext,
@@ -760,7 +762,7 @@ mod trnews_api {
         }
     }
 
-    /// Whether `choice` (true, false or "auto", as given to `responder`) turns the error estimate on for `r`: "auto" when the 2h and 4h companions would cost at most 15% extra (and says so when they would not). For scripts that estimate their own quantities from runs at 2h and 4h.
+    /// Whether `choice` (true, false or "auto", as given to `responder`) turns the error estimate on for `r`: "auto" when the scene's companions (`scene.companions()`) would cost at most 15% extra (and says so when they would not). For scripts that estimate their own quantities from runs on the companions.
     #[rhai_fn(global, return_raw)]
     pub fn error_estimate_wanted(
         ctx: NativeCallContext,
