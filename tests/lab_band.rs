@@ -2,7 +2,7 @@
 //! the transducer band.
 
 use std::sync::Arc;
-use trnews::scene::{Absorber, Scene, SceneSpec};
+use trnews::scene::{Absorber, Resolution, Scene, SceneSpec};
 use trnews::transducer::{energy_outside_band, TransducerSpec};
 use trnews::trnews::{tr_news, Responder, TrNewsSpec};
 
@@ -21,14 +21,19 @@ fn focus_outside_band(spec: &SceneSpec) -> f64 {
 
 #[test]
 fn default_experiment_focuses_inside_the_transducer_band() {
-    // Issue bound: under 10% of y_TR's energy outside the band, cracked and uncracked
-    // (measured 0.03% and 0.11%). The report's setup (dashpots, pinned corners, raw
-    // displacement) on the same draw puts 69% outside: the bound is not met by accident.
-    let cracked = SceneSpec::default();
-    for (name, spec) in [("uncracked", cracked.uncracked()), ("cracked", cracked)] {
-        let outside = focus_outside_band(&spec);
-        println!("{name}: {:.2}% of y_TR outside the band", 100.0 * outside);
-        assert!(outside < 0.10, "{name}: {outside}");
+    // Issue bound: under 10% of y_TR's energy outside the band, cracked and uncracked, on
+    // the report's triangles and on the quick preset's spectral elements (measured 0.03% and
+    // 0.11% on T3). The report's setup (dashpots, pinned corners, raw displacement) on the
+    // same draw puts 69% outside: the bound is not met by accident.
+    for (kind, cracked) in [
+        ("T3", SceneSpec::default()),
+        ("SEM", SceneSpec::preset(Resolution::Quick)),
+    ] {
+        for (name, spec) in [("uncracked", cracked.uncracked()), ("cracked", cracked)] {
+            let outside = focus_outside_band(&spec);
+            println!("{kind}, {name}: {:.2}% of y_TR outside the band", 100.0 * outside);
+            assert!(outside < 0.10, "{kind}, {name}: {outside}");
+        }
     }
     let report = SceneSpec {
         absorber: Absorber::Dashpot,
