@@ -51,9 +51,19 @@ fn estimate_and_truth(
     duration: f64,
     exact: impl Fn(f64) -> f64,
 ) -> (Estimate, f64) {
-    let [fine, medium, coarse] = [h, 2.0 * h, 4.0 * h].map(|s| trace(layers, s, depth, duration));
+    let traces = [h, 2.0 * h, 4.0 * h].map(|s| trace(layers, s, depth, duration));
+    judge(traces, Refinement::ElementSizes, exact)
+}
+
+/// (estimate from the main trace and its two companions, true relative L2 error of the main
+/// trace against `exact`).
+fn judge(
+    [fine, medium, coarse]: [Signal; 3],
+    refinement: Refinement,
+    exact: impl Fn(f64) -> f64,
+) -> (Estimate, f64) {
     let window = (0.0, fine.t_end_s());
-    let e = Estimate::waveform(&fine, &medium, &coarse, window, Refinement::ElementSizes).unwrap();
+    let e = Estimate::waveform(&fine, &medium, &coarse, window, refinement).unwrap();
     let truth = Signal::new(
         fine.dt_s,
         0.0,
@@ -103,18 +113,23 @@ fn sem_estimate_and_truth(
     duration: f64,
     exact: impl Fn(f64) -> f64,
 ) -> (Estimate, f64) {
-    let [fine, medium, coarse] =
-        [order, order - 1, order - 2].map(|p| sem_trace(layers, p, size, depth, duration));
-    let window = (0.0, fine.t_end_s());
-    let e = Estimate::waveform(&fine, &medium, &coarse, window, Refinement::Orders).unwrap();
-    let truth = Signal::new(
-        fine.dt_s,
-        0.0,
-        (0..fine.len()).map(|k| exact(fine.time_at(k))).collect(),
-    )
-    .unwrap();
-    let err = trnews::signal::relative_l2(&fine, &truth, None).unwrap();
-    (e, err)
+    let traces = [order, order - 1, order - 2].map(|p| sem_trace(layers, p, size, depth, duration));
+    judge(traces, Refinement::Orders, exact)
+}
+
+/// The homogeneous epoxy strip (4 mm), the receiver depth (2 mm) and a duration that ends
+/// before the bottom's reflection returns.
+fn epoxy_plane_wave() -> ([(Material, f64); 1], f64, f64) {
+    let depth = 2e-3;
+    let duration = depth / epoxy().wave_speeds().p_y_m_s + 8.0 * WIDTH;
+    ([(epoxy(), 4e-3)], depth, duration)
+}
+
+/// v(t, d) = -p(t - d / c) / (rho c) in the homogeneous strip (no reflection in the window).
+fn epoxy_plane_wave_exact(depth: f64) -> impl Fn(f64) -> f64 {
+    let e = epoxy();
+    let (c, z) = (e.wave_speeds().p_y_m_s, e.impedance_p_y());
+    move |t| -load(t - depth / c) / z
 }
 
 /// The bound: a reliable estimate within a factor 2 of the true error.
@@ -135,20 +150,15 @@ fn check_refine(name: &str, (e, truth): (Estimate, f64)) {
 
 #[test]
 fn estimate_tracks_the_true_error_of_a_plane_wave_and_refuses_a_coarse_mesh() {
-    // v(t, d) = -p(t - d / c) / (rho c) in a homogeneous strip (no reflection in the window).
-    let e = epoxy();
-    let (c, z) = (e.wave_speeds().p_y_m_s, e.impedance_p_y());
-    let depth = 2e-3;
-    let duration = depth / c + 8.0 * WIDTH;
-    let layers = [(e, 4e-3)];
-    let exact = |t: f64| -load(t - depth / c) / z;
+    let (layers, depth, duration) = epoxy_plane_wave();
+    let exact = epoxy_plane_wave_exact(depth);
     check_reliable(
         "plane wave, h = 12.5 um",
-        estimate_and_truth(&layers, 12.5e-6, depth, duration, exact),
+        estimate_and_truth(&layers, 12.5e-6, depth, duration, &exact),
     );
     check_refine(
         "plane wave, h = 100 um",
-        estimate_and_truth(&layers, 100e-6, depth, duration, exact),
+        estimate_and_truth(&layers, 100e-6, depth, duration, &exact),
     );
 }
 
@@ -159,13 +169,9 @@ fn order_companions_track_the_true_error_of_spectral_elements() {
     // p - 1 and p - 2 estimate the error at order p within the factor 2, reliable or
     // as a bound, for p = 4 to 8 (measured 1.66, 1.18, 1.02, 0.73, 0.63 times the true
     // error); at order 3 the three orders are not yet converging and the verdict is "refine".
-    let e = epoxy();
-    let (c, z) = (e.wave_speeds().p_y_m_s, e.impedance_p_y());
-    let depth = 2e-3;
-    let duration = depth / c + 8.0 * WIDTH;
-    let layers = [(e, 4e-3)];
-    let exact = |t: f64| -load(t - depth / c) / z;
-    let at = |order| sem_estimate_and_truth(&layers, order, 0.5e-3, depth, duration, exact);
+    let (layers, depth, duration) = epoxy_plane_wave();
+    let exact = epoxy_plane_wave_exact(depth);
+    let at = |order| sem_estimate_and_truth(&layers, order, 0.5e-3, depth, duration, &exact);
     for order in 4..=8 {
         let (est, truth) = at(order);
         println!("order {order}: {} vs true {truth:.3e}", est.describe());

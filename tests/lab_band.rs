@@ -31,7 +31,10 @@ fn default_experiment_focuses_inside_the_transducer_band() {
     ] {
         for (name, spec) in [("uncracked", cracked.uncracked()), ("cracked", cracked)] {
             let outside = focus_outside_band(&spec);
-            println!("{kind}, {name}: {:.2}% of y_TR outside the band", 100.0 * outside);
+            println!(
+                "{kind}, {name}: {:.2}% of y_TR outside the band",
+                100.0 * outside
+            );
             assert!(outside < 0.10, "{kind}, {name}: {outside}");
         }
     }

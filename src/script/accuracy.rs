@@ -1,6 +1,8 @@
 //! Rhai module `accuracy`: discretisation error estimates (type `Estimate`), the ones the
-//! TR-NEWS procedures attach with `error_estimate: true` and Richardson estimates of a
-//! script's own quantities from runs at h, 2h and 4h (see [`crate::accuracy`]).
+//! TR-NEWS procedures attach with `error_estimate: true` and estimates of a script's own
+//! quantities from runs on a scene and its two companions (h, 2h, 4h on triangles; orders p,
+//! p - 1, p - 2 on spectral elements; see [`crate::accuracy`]). The overloads without a scene
+//! assume triangles.
 
 use crate::accuracy::Estimate;
 use rhai::plugin::*;
