@@ -40,12 +40,12 @@ pub enum Refinement {
     /// Spectral elements on the same elements at orders p - 1 and p - 2 along x (at most as
     /// many across). Their error falls exponentially with the order, e_p ~ C rho^p: the
     /// formulas above hold with 2^-q = rho, the ratio per order, and d_1 / (2^q - 1) =
-    /// d_1 rho / (1 - rho) is the geometric tail. The estimate expects at least a halving per
-    /// order (order 1: then e_p <= d_1). The observed ratio of the two lower orders
-    /// understates the one at the top order (the error from the order across and the time
-    /// step does not fall with the order along x), so a faster observed rate gives the bound
-    /// d_1, which is what README "Error estimates of spectral elements" checks against a
-    /// converged reference.
+    /// d_1 rho / (1 - rho) is the geometric tail. The estimate expects a halving per order
+    /// (order 1: the tail is d_1; at the slowest fall accepted, rho = 2^-0.5, it is 2.4 d_1).
+    /// A faster fall between the lower orders overstates the fall at the top order (the error
+    /// from the orders across and from the time step does not fall with the order along x),
+    /// so it gives the bound d_1; README "Error estimates on spectral elements" checks both
+    /// against a converged reference.
     Orders,
 }
 
