@@ -12,8 +12,16 @@
 //!   is below epsilon; the residual shrinks by |1 - b (D_m + D_s)| per iteration, so it
 //!   converges in one step for b = 1/(D_m + D_s) and diverges for b > 2/(D_m + D_s);
 //! - friction: tangential gap g_T = u_x(slave) - u_x(master), stick point g_T^s, trial
-//!   lambda_T' = (g_T - g_T^s)/(D_m + D_s); stick if |lambda_T'| <= mu lambda_N, else slip
-//!   with lambda_T = sgn(g_T - g_T^s) mu lambda_N and the stick point moved.
+//!   lambda_T' = (g_T - g_T^s)/(D_m + D_s); stick if |lambda_T'| <= s, the frictional
+//!   strength, else slip with lambda_T = sgn(g_T - g_T^s) s and the stick point moved;
+//! - strength s = mu lambda_N (Coulomb, the report's law) or, with a response time tau,
+//!   s = mu lambda_N* where d lambda_N*/dt = (lambda_N - lambda_N*) / tau (the simplified
+//!   Prakash-Clifton law: Prakash and Clifton 1993; Cochard and Rice 2000), integrated exactly
+//!   over a step with lambda_N held: s <- e^(-dt/tau) s + (1 - e^(-dt/tau)) mu lambda_N.
+//!   With the instantaneous law, node-to-node friction on the GLL nodes of spectral elements
+//!   of order 3 and above flutters: the pairs chatter open and shut and the mean friction
+//!   falls short of mu N. A tau of the P-wave travel time over the mean node spacing along
+//!   the crack removes it (README "Friction at high order").
 
 use crate::error::{Error, Result};
 use crate::mesh::Crack;
@@ -46,6 +54,59 @@ pub struct ContactOptions {
     pub method: ContactMethod,
     /// Coulomb friction coefficient mu (report: 0.6).
     pub friction: f64,
+    /// Response time tau (s) of the frictional strength to the normal force (simplified
+    /// Prakash-Clifton law, module doc); 0 (default): instantaneous, the report's Coulomb law.
+    pub normal_stress_lag_s: f64,
+}
+
+impl ContactOptions {
+    /// Checks every option; an error names the field and the value given.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return Err(Error::invalid(
+                "contact.friction",
+                self.friction,
+                "must be finite and >= 0",
+            ));
+        }
+        let lag = self.normal_stress_lag_s;
+        if !(lag.is_finite() && lag >= 0.0) {
+            return Err(Error::invalid(
+                "contact.normal_stress_lag_s",
+                lag,
+                "must be finite and >= 0 (s; 0: the instantaneous Coulomb law)",
+            ));
+        }
+        if let ContactMethod::AugmentedLagrangian {
+            penalty_scale,
+            tolerance_m,
+            max_iterations,
+        } = self.method
+        {
+            if !(penalty_scale.is_finite() && penalty_scale > 0.0) {
+                return Err(Error::invalid(
+                    "contact.penalty_scale",
+                    penalty_scale,
+                    "must be finite and > 0",
+                ));
+            }
+            if !(tolerance_m.is_finite() && tolerance_m > 0.0) {
+                return Err(Error::invalid(
+                    "contact.tolerance_m",
+                    tolerance_m,
+                    "must be finite and > 0",
+                ));
+            }
+            if max_iterations == 0 || max_iterations > MAX_AL_ITERATIONS {
+                return Err(Error::invalid(
+                    "contact.max_iterations",
+                    max_iterations,
+                    format!("must be in 1..={MAX_AL_ITERATIONS} (iterations per step)"),
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl Default for ContactOptions {
@@ -53,6 +114,7 @@ impl Default for ContactOptions {
         ContactOptions {
             method: ContactMethod::Exact,
             friction: 0.6,
+            normal_stress_lag_s: 0.0,
         }
     }
 }
@@ -140,6 +202,11 @@ pub struct ContactSolver {
     pairs: Vec<PairDofs>,
     stick_gap: Vec<f64>,
     gap: Vec<f64>,
+    /// mu lambda_N* per pair, the frictional strength (0 at the start: a run starts with the
+    /// crack unloaded).
+    strength: Vec<f64>,
+    /// e^(-dt/tau): the part of the strength kept over a step (0 for the instantaneous law).
+    strength_memory: f64,
     pub(crate) force: Vec<PairForce>,
     report: ContactReport,
     counts: Counts,
@@ -147,48 +214,17 @@ pub struct ContactSolver {
 }
 
 impl ContactSolver {
-    /// Prepares contact for `crack` given the per-DOF compliance D = dt^2 / m_eff.
+    /// Prepares contact for `crack` given the per-DOF compliance D = dt^2 / m_eff of steps
+    /// of `dt_s`.
     pub fn new(
         crack: &Crack,
         compliance: &[f64],
         options: ContactOptions,
         steps: usize,
+        dt_s: f64,
     ) -> Result<ContactSolver> {
-        if !(options.friction.is_finite() && options.friction >= 0.0) {
-            return Err(Error::invalid(
-                "contact.friction",
-                options.friction,
-                "must be finite and >= 0",
-            ));
-        }
-        if let ContactMethod::AugmentedLagrangian {
-            penalty_scale,
-            tolerance_m,
-            max_iterations,
-        } = options.method
-        {
-            if !(penalty_scale.is_finite() && penalty_scale > 0.0) {
-                return Err(Error::invalid(
-                    "contact.penalty_scale",
-                    penalty_scale,
-                    "must be finite and > 0",
-                ));
-            }
-            if !(tolerance_m.is_finite() && tolerance_m > 0.0) {
-                return Err(Error::invalid(
-                    "contact.tolerance_m",
-                    tolerance_m,
-                    "must be finite and > 0",
-                ));
-            }
-            if max_iterations == 0 || max_iterations > MAX_AL_ITERATIONS {
-                return Err(Error::invalid(
-                    "contact.max_iterations",
-                    max_iterations,
-                    format!("must be in 1..={MAX_AL_ITERATIONS} (iterations per step)"),
-                ));
-            }
-        }
+        options.validate()?;
+        let lag = options.normal_stress_lag_s;
         let pairs: Vec<PairDofs> = crack
             .pairs
             .iter()
@@ -216,6 +252,8 @@ impl ContactSolver {
             pairs,
             stick_gap: vec![0.0; n],
             gap: vec![0.0; n],
+            strength: vec![0.0; n],
+            strength_memory: if lag > 0.0 { (-dt_s / lag).exp() } else { 0.0 },
             force: vec![PairForce::default(); n],
             report,
             counts: Counts::with_capacity(steps),
@@ -239,6 +277,8 @@ impl ContactSolver {
         let mu = self.options.friction;
         for (k, p) in self.pairs.iter().enumerate() {
             let lambda_n = self.force[k].normal;
+            let memory = self.strength_memory;
+            self.strength[k] = memory * self.strength[k] + (1.0 - memory) * mu * lambda_n;
             u_next[p.slave[1]] -= p.d_slave[1] * lambda_n;
             u_next[p.master[1]] += p.d_master[1] * lambda_n;
             let residual = u_next[p.slave[1]] - u_next[p.master[1]];
@@ -258,12 +298,13 @@ impl ContactSolver {
                 continue;
             }
             let trial = (g_t - self.stick_gap[k]) / d_t;
-            let lambda_t = if trial.abs() <= mu * lambda_n {
+            let strength = self.strength[k];
+            let lambda_t = if trial.abs() <= strength {
                 stick += 1;
                 trial
             } else {
                 slip += 1;
-                trial.signum() * mu * lambda_n
+                trial.signum() * strength
             };
             u_next[p.slave[0]] -= p.d_slave[0] * lambda_t;
             u_next[p.master[0]] += p.d_master[0] * lambda_t;

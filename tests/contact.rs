@@ -14,6 +14,7 @@ fn exact(friction: f64) -> Option<ContactOptions> {
     Some(ContactOptions {
         method: ContactMethod::Exact,
         friction,
+        ..Default::default()
     })
 }
 
@@ -169,6 +170,7 @@ fn impact(method: ContactMethod) -> (RunOutput, f64, f64) {
         contact: Some(ContactOptions {
             method,
             friction: 0.6,
+            ..Default::default()
         }),
         initial_velocity: Some(v),
         ..Default::default()
@@ -251,6 +253,7 @@ fn augmented_lagrangian_converges_below_bound_and_reports_divergence_above() {
         contact: Some(ContactOptions {
             method: al(100.0),
             friction: 0.6,
+            ..Default::default()
         }),
         initial_velocity: Some(v),
         ..Default::default()

@@ -62,6 +62,7 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         "sem_target.csv",
         "sem_target.png",
         "sem_target_timing.csv",
+        "sem_target_friction_lag.csv",
     ] {
         let path = out.join("plots").join(file);
         let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));

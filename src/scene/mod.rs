@@ -667,6 +667,19 @@ impl SceneSpec {
         }
     }
 
+    /// The contact options of the crack, as the spec gives them (None: no crack, an open
+    /// crack, or tied faces).
+    pub fn contact(&self) -> Option<ContactOptions> {
+        match &self.gmsh {
+            None => self
+                .crack
+                .as_ref()
+                .filter(|c| !c.tied)
+                .and_then(|c| c.contact),
+            Some(g) => g.crack_line.filter(|_| !g.tied).and(g.contact),
+        }
+    }
+
     /// How [`SceneSpec::companions`] refine this scene.
     pub fn refinement(&self) -> Refinement {
         match self.discretisation {
@@ -954,6 +967,9 @@ impl Scene {
                 "must be finite and > 0 (the focusing signals are scaled to it)",
             ));
         }
+        if let Some(contact) = spec.contact() {
+            contact.validate()?;
+        }
         let scene = match spec.discretisation {
             DiscretisationSpec::T3 => build_t3(spec)?,
             DiscretisationSpec::Sem {
@@ -1012,18 +1028,9 @@ impl Scene {
         self.crack().is_none() || self.contact().is_none()
     }
 
-    /// The contact options of the scene's crack, as its spec gives them (None: no crack, an
-    /// open crack, or tied faces).
+    /// The contact options of the scene's crack ([`SceneSpec::contact`]).
     pub fn contact(&self) -> Option<ContactOptions> {
-        match &self.spec.gmsh {
-            None => self
-                .spec
-                .crack
-                .as_ref()
-                .filter(|c| !c.tied)
-                .and_then(|c| c.contact),
-            Some(g) => g.crack_line.filter(|_| !g.tied).and(g.contact),
-        }
+        self.spec.contact()
     }
 
     /// A run configuration for this scene: its contact options and stability estimate.

@@ -613,7 +613,7 @@ fn central_difference<D: Discretisation>(
     let run = (body, receivers, config, steps, dt_crit_s, setup);
     match (body.crack, &config.contact) {
         (Some(crack), Some(options)) => {
-            let solver = ContactSolver::new(crack, &coef.compliance, *options, steps)?;
+            let solver = ContactSolver::new(crack, &coef.compliance, *options, steps, dt)?;
             let stepper = CentralDifference::new(disc, coef, dt, forced, solver, u0, v0);
             finish_explicit(stepper, run)
         }
