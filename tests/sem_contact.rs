@@ -661,9 +661,10 @@ fn frictionless_block_slides_at_t_over_m() {
 /// 0.9976 and 1.0010, 1.0004, 1.0014) and its pairs stay shut (at least 28 of the 33 in contact
 /// on average after the ramp; measured 30.3-31.3, the trailing edge's pair lifted). Every grid
 /// has a mean node spacing of 62.5 um along the crack, 24 ns of epoxy P-wave travel; 10 ns is
-/// too short (measured 1.0013, 1.055, 1.166), and the steps are 15, 6.1 and 1.9 ns: the time
-/// that matters is the travel time, not the step. Without it the blocks of orders 4 and 8 slide
-/// more than 5% too fast (measured 9.6% and 27%): the test tells the two laws apart.
+/// too short at orders 4 and 8 (measured 1.0013, 1.055, 1.166), and the steps are 15, 6.1 and
+/// 1.9 ns: the time that seems to matter is the travel time, not the step. Without it the
+/// blocks of orders 4 and 8 slide more than 5% too fast (measured 9.6% and 27%): the test
+/// tells the two laws apart.
 #[test]
 fn normal_stress_lag_restores_coulomb_sliding_at_high_order() {
     let (mu, p_n, p_t) = (0.3, 1e6, 0.6e6);
