@@ -275,9 +275,9 @@ impl ContactSolver {
         self.report.iterations_max = self.report.iterations_max.max(iterations);
         let (mut contact, mut stick, mut slip) = (0u32, 0u32, 0u32);
         let mu = self.options.friction;
+        let memory = self.strength_memory;
         for (k, p) in self.pairs.iter().enumerate() {
             let lambda_n = self.force[k].normal;
-            let memory = self.strength_memory;
             self.strength[k] = memory * self.strength[k] + (1.0 - memory) * mu * lambda_n;
             u_next[p.slave[1]] -= p.d_slave[1] * lambda_n;
             u_next[p.master[1]] += p.d_master[1] * lambda_n;

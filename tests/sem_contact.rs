@@ -592,7 +592,7 @@ fn push_block(
 /// order 4, at element corners and inside alike, against under 7% at order 2; a pair that
 /// touches again sticks for a step and carries less than mu lambda_N. Friction itself drives
 /// the chatter (a flutter of the instantaneous law): frictionless, 32 of the 33 pairs stay shut
-/// at every order and the sliding is right ([`frictionless_block_slides_at_t_over_m`]). A
+/// (measured at orders 1, 2, 4 and 8) and the sliding is right ([`frictionless_block_slides_at_t_over_m`]). A
 /// response time of the friction strength removes it
 /// ([`normal_stress_lag_restores_coulomb_sliding_at_high_order`]).
 const FRICTION_GRID: (usize, usize) = (2, 16);
@@ -640,18 +640,33 @@ fn pushed_block_slides_at_coulomb_deceleration_or_sticks() {
     assert!(out.report.energy_residual_peak < 1e-9, "{:?}", out.report);
 }
 
-/// mu = 0: the block slides at T/m, at order 4 (the contact chatter of the friction test's
-/// note changes no tangential force here).
+/// Mean number of pairs in contact over the second half of a pushed-block run (after the
+/// ramp).
+fn pairs_shut_after_ramp(out: &RunOutput) -> f64 {
+    let in_contact = &out.contact_series.as_ref().unwrap().in_contact.samples;
+    let after_ramp = &in_contact[in_contact.len() / 2..];
+    after_ramp.iter().sum::<f64>() / after_ramp.len() as f64
+}
+
+/// mu = 0: the block slides at T/m at order 4, and the pairs do not chatter (at least 31 of
+/// the 33 in contact on average after the ramp; measured 33.00 here, and 32 of 33 under the
+/// friction test's stronger push at orders 1, 2, 4 and 8, the trailing edge's pair lifted), so
+/// friction drives the chatter of [`FRICTION_GRID`]'s note.
 #[test]
 fn frictionless_block_slides_at_t_over_m() {
     let (out, mass) = push_block((4, 8), 1e6, 0.2e6, coulomb(0.0, 0.0));
     let measured = acceleration_after_ramp(&out.traces[0]);
     let expected = 0.2e6 * BLOCK_WIDTH / mass;
-    eprintln!("frictionless: {:.5} of T/m", measured / expected);
+    let shut = pairs_shut_after_ramp(&out);
+    eprintln!(
+        "frictionless: {:.5} of T/m, {shut:.2} pairs in contact",
+        measured / expected
+    );
     assert!(
         (measured / expected - 1.0).abs() < 0.02,
         "{measured:e} vs {expected:e}"
     );
+    assert!(shut >= 31.0, "{shut} pairs in contact");
     assert!(out.report.energy_residual_peak < 1e-9, "{:?}", out.report);
 }
 
@@ -673,9 +688,7 @@ fn normal_stress_lag_restores_coulomb_sliding_at_high_order() {
             let (out, mass) = push_block(grid, p_n, p_t, coulomb(mu, lag));
             let expected = (p_t - mu * p_n) * BLOCK_WIDTH / mass;
             let measured = acceleration_after_ramp(&out.traces[0]) / expected;
-            let in_contact = &out.contact_series.as_ref().unwrap().in_contact.samples;
-            let after_ramp = &in_contact[in_contact.len() / 2..];
-            let shut = after_ramp.iter().sum::<f64>() / after_ramp.len() as f64;
+            let shut = pairs_shut_after_ramp(&out);
             eprintln!(
                 "order {}, tau = {lag:e} s: acceleration {measured:.5} of (T - mu N)/m, {shut:.2} \
                  pairs in contact",
