@@ -17,8 +17,9 @@ use std::time::{Duration, Instant};
 
 static CANCELLED: AtomicBool = AtomicBool::new(false);
 
-// The deadline and the memory limit belong to the thread that runs a script (the solvers'
-// step loops run on it too), so that hosts on different threads do not share them.
+// The deadline and the memory limit belong to the thread that runs a script, so that hosts on
+// different threads do not share them; work it hands to other threads carries them there
+// (`Limits`, `crate::parallel`).
 thread_local! {
     /// Deadline as nanoseconds after [`epoch`], plus one; 0 means no deadline.
     static DEADLINE_NS: AtomicU64 = const { AtomicU64::new(0) };
@@ -160,6 +161,50 @@ pub fn start(limit: Option<Duration>) {
             DEADLINE_NS.with(|l| l.store(ns.saturating_add(1), Ordering::SeqCst));
         }
         None => DEADLINE_NS.with(|l| l.store(0, Ordering::SeqCst)),
+    }
+}
+
+/// The limits of the current thread: its deadline, memory limit and the start of its native
+/// work. Carried onto the threads that do its work in parallel ([`Limits::within`]), so that a
+/// time limit or a memory limit set for a script also holds on rayon's workers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    deadline_ns: u64,
+    limit_ms: u64,
+    memory_limit: u64,
+    allocated_at_start: u64,
+}
+
+impl Limits {
+    /// The limits set on this thread.
+    pub fn current() -> Limits {
+        Limits {
+            deadline_ns: DEADLINE_NS.with(|l| l.load(Ordering::Relaxed)),
+            limit_ms: LIMIT_MS.with(|l| l.load(Ordering::Relaxed)),
+            memory_limit: memory_limit(),
+            allocated_at_start: ALLOCATED_AT_START.with(|a| a.load(Ordering::Relaxed)),
+        }
+    }
+
+    /// Runs `f` with these limits on the current thread; the thread's own are restored
+    /// afterwards, also on panic.
+    pub fn within<T>(self, f: impl FnOnce() -> T) -> T {
+        struct Restore(Limits);
+        impl Drop for Restore {
+            fn drop(&mut self) {
+                self.0.set();
+            }
+        }
+        let _restore = Restore(Limits::current());
+        self.set();
+        f()
+    }
+
+    fn set(self) {
+        DEADLINE_NS.with(|l| l.store(self.deadline_ns, Ordering::SeqCst));
+        LIMIT_MS.with(|l| l.store(self.limit_ms, Ordering::SeqCst));
+        MEMORY_LIMIT.with(|l| l.store(self.memory_limit, Ordering::SeqCst));
+        ALLOCATED_AT_START.with(|a| a.store(self.allocated_at_start, Ordering::SeqCst));
     }
 }
 

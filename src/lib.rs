@@ -29,6 +29,7 @@ pub mod lab;
 pub mod laminate;
 pub mod material;
 pub mod mesh;
+pub mod parallel;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod scene;

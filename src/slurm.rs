@@ -101,38 +101,34 @@ impl Jobs {
             return Err("--cpus 0: give at least 1 CPU per task".into());
         }
         for (flag, value) in [("--partition", &args.partition), ("--time", &args.time)] {
-            if let Some(v) = value
-                .as_deref()
-                .filter(|v| v.is_empty() || v.contains(char::is_whitespace))
-            {
-                return Err(format!("{flag} '{v}' is empty or contains white space"));
+            if let Some(v) = value {
+                sbatch_word(flag, v)?;
             }
         }
         if let Some(bad) = args.set.iter().find(|s| !s.contains('=')) {
             return Err(format!("--set '{bad}' is not NAME=VALUE"));
         }
+        for s in &args.set {
+            one_line("--set", s)?;
+        }
+        one_line("the script's path", &args.script.to_string_lossy())?;
         let script = args
             .script
             .canonicalize()
             .map_err(|e| format!("cannot read script {}: {e}", args.script.display()))?;
+        one_line("the script's path", &script.to_string_lossy())?;
+        one_line("--out", &args.out.to_string_lossy())?;
         std::fs::create_dir_all(&args.out)
             .map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
         let out = args
             .out
             .canonicalize()
             .map_err(|e| format!("cannot open {}: {e}", args.out.display()))?;
-        if out.to_string_lossy().contains(char::is_whitespace) {
-            return Err(format!(
-                "--out {}: Slurm's log path cannot hold white space; choose another directory",
-                out.display()
-            ));
-        }
+        sbatch_word("--out", &out.to_string_lossy())?;
         let binary = std::env::current_exe()
             .map_err(|e| format!("cannot find the trnews-script binary: {e}"))?;
-        let stem = script
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "sweep".into());
+        one_line("the trnews-script binary's path", &binary.to_string_lossy())?;
+        let stem = job_stem(&script);
         let log_dir = out.join("slurm");
         let mut run = vec![
             binary.display().to_string(),
@@ -200,6 +196,58 @@ impl Jobs {
             crate::io::write_atomic(path, text.as_bytes()).map_err(|e| e.to_string())?;
         }
         Ok(())
+    }
+}
+
+/// Refuses a value that cannot be carried on one line of a batch file: a control character (a
+/// newline would end the line and start a shell command, or end the `#SBATCH` header).
+fn one_line(field: &str, value: &str) -> Result<(), String> {
+    match value.chars().find(|c| c.is_control()) {
+        Some(c) => Err(format!(
+            "{field} {value:?} holds the control character {c:?}, which a batch file cannot \
+             carry; rename it"
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Refuses a value of an `#SBATCH` line that sbatch could read as anything but one literal
+/// word: only letters, digits and `/ . _ - + : ,` pass (no white space, quotes, `$`, `\`, or
+/// `%`, which sbatch expands in file names).
+fn sbatch_word(field: &str, value: &str) -> Result<(), String> {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "/._-+:,".contains(c);
+    match value.chars().find(|&c| !plain(c)) {
+        _ if value.is_empty() => Err(format!("{field} is empty")),
+        Some(c) => Err(format!(
+            "{field} {value:?}: the character {c:?} cannot go on an #SBATCH line (letters, \
+             digits and / . _ - + : , only); choose another"
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The stem that names the jobs, their batch files and logs: the script's file stem with every
+/// character other than letters, digits, `.`, `_` and `-` written as `_` (the script itself
+/// is run by its real path, quoted).
+fn job_stem(script: &Path) -> String {
+    let stem = script
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let stem: String = stem
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "._-".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if stem.is_empty() {
+        "sweep".into()
+    } else {
+        stem
     }
 }
 

@@ -19,7 +19,6 @@ use crate::error::{require_positive, Error, Result};
 use crate::scene::{Resolution, Scene};
 use crate::signal::{self, ChirpSpec, Peak, SideLobes, Signal};
 use crate::solve::RunReport;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
@@ -510,10 +509,7 @@ impl Responder {
                 .collect::<Result<Vec<_>>>()?;
             return c.answer_all(&drives, self.dt_s, duration_s);
         }
-        sources
-            .par_iter()
-            .map(|s| self.respond(s, duration_s))
-            .collect()
+        crate::parallel::try_map(sources, |s| self.respond(s, duration_s))
     }
 }
 

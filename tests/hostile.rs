@@ -509,17 +509,107 @@ fn sandbox_symlinks_never_lead_out() {
 #[test]
 fn stale_temp_files_of_dead_writers_are_removed() {
     let dir = TempDir::new("hostile-stale");
-    // pid 999999999 does not exist (above Linux's pid_max)
-    let stale = dir.0.join(".x.tmp-999999999-3.csv");
+    // An hour and a minute old, its lock free: its writer is gone.
+    let stale = dir.0.join(".x.tmp-00ff00ff00ff00ff.csv");
     std::fs::write(&stale, "half").expect("stale");
+    let old = std::time::SystemTime::now() - Duration::from_secs(3660);
+    std::fs::File::options()
+        .write(true)
+        .open(&stale)
+        .and_then(|f| f.set_modified(old))
+        .expect("age");
     assert_eq!(
         run(&dir.0, "io::write_csv(\"x.csv\", [\"a\"], [[1.0]]);"),
         None
     );
-    if cfg!(target_os = "linux") {
-        assert!(!stale.exists(), "stale temp file left");
-    }
+    assert!(!stale.exists(), "stale temp file left");
     assert!(dir.0.join("x.csv").is_file());
+}
+
+/// `trnews-script slurm` on scripts whose names carry shell syntax (quotes, `$(...)`,
+/// backticks, `;`) and `--set` values that do: the batch file, run by bash as a Slurm task
+/// would run it, runs the script by its name and executes nothing from a name. Names with a
+/// newline (which would end a `#SBATCH` line or a comment and start a command) are refused,
+/// naming the field, and no batch file is written.
+#[test]
+fn slurm_batch_files_execute_nothing_from_names() {
+    let dir = TempDir::new("hostile-slurm");
+    let marker = dir.0.join("PWNED");
+    let hostile = [
+        "a$(touch PWNED).rhai",
+        "b`touch PWNED`.rhai",
+        "c';touch PWNED;'.rhai",
+        "d\"$(touch PWNED)\".rhai",
+        "e%A $HOME \\ x.rhai",
+    ];
+    let value = "tag=x'$(touch PWNED)`touch PWNED`";
+    for name in hostile {
+        let script = dir.script(name, "print(`ran ${param(\"tag\", \"\")}`);");
+        let out = dir.0.join("out");
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_trnews-script"))
+            .current_dir(&dir.0)
+            .arg("slurm")
+            .arg(&script)
+            .args(["--array", "1", "--set", value, "--out"])
+            .arg(&out)
+            .output()
+            .expect("slurm");
+        assert!(o.status.success(), "{name}: {o:?}");
+        let batch = files(&out.join("slurm"))
+            .into_iter()
+            .find(|p| p.to_string_lossy().ends_with("-array.sbatch"))
+            .expect("array batch file");
+        let text = std::fs::read_to_string(&batch).expect("batch");
+        assert!(
+            text.lines().filter(|l| l.starts_with("#SBATCH")).count() >= 4,
+            "{name}: {text}"
+        );
+        let ran = std::process::Command::new("bash")
+            .arg(&batch)
+            .current_dir(&dir.0)
+            .env("SLURM_ARRAY_TASK_ID", "0")
+            .env("SLURM_ARRAY_TASK_COUNT", "1")
+            .output()
+            .expect("bash");
+        let said = String::from_utf8_lossy(&ran.stderr) + String::from_utf8_lossy(&ran.stdout);
+        assert!(
+            ran.status.success() && said.contains("] ran x'$(touch PWNED)`touch PWNED`"),
+            "{name}: {ran:?}\n{text}"
+        );
+        assert!(
+            !marker.exists(),
+            "{name}: a command ran from a name:\n{text}"
+        );
+        std::fs::remove_dir_all(&out).expect("clean");
+    }
+    for (args, field) in [
+        (vec!["x\ntouch PWNED\n.rhai"], "the script's path"),
+        (vec!["ok.rhai", "--set", "a=1\ntouch PWNED"], "--set"),
+        (
+            vec!["ok.rhai", "--partition", "p\n#SBATCH --x"],
+            "--partition",
+        ),
+        (vec!["ok.rhai", "--time", "1:00 $(touch PWNED)"], "--time"),
+    ] {
+        dir.script(args[0], "print(1);");
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_trnews-script"))
+            .current_dir(&dir.0)
+            .arg("slurm")
+            .args(&args)
+            .args(["--array", "2", "--out", "refused"])
+            .output()
+            .expect("slurm");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(field),
+            "{args:?}: {err}"
+        );
+        assert!(
+            !dir.0.join("refused/slurm").exists(),
+            "{args:?}: files written"
+        );
+    }
+    assert!(!marker.exists());
 }
 
 // ------------------------------------------------------------------ fuzz
@@ -735,6 +825,244 @@ fn fuzz_scene_run_signal_plot_and_io_calls() {
     assert_finite_files(&dir.0);
     eprintln!(
         "fuzz: seed {seed}, {cases} cases ({ok} ran, {errors} errors) in {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+}
+
+/// A mutation of `bytes`: flipped, cut, grown, or with a number made huge.
+fn mutate(g: &mut Gen, bytes: &[u8]) -> Vec<u8> {
+    let mut b = bytes.to_vec();
+    let at = |g: &mut Gen, len: usize| (g.next() % len.max(1) as u64) as usize;
+    match g.next() % 5 {
+        0 => {
+            for _ in 0..1 + g.next() % 8 {
+                let i = at(g, b.len());
+                if let Some(x) = b.get_mut(i) {
+                    *x ^= 1 << (g.next() % 8);
+                }
+            }
+        }
+        1 => b.truncate(at(g, b.len())),
+        2 => {
+            let i = at(g, b.len());
+            let junk = g.pick(&[
+                "((((((((",
+                "[[[[[[[[",
+                "[('a', ",
+                "\"",
+                "\n",
+                "\0",
+                "{'a': 1, 'a': 2}",
+            ]);
+            b.splice(
+                i..i,
+                junk.bytes()
+                    .cycle()
+                    .take(junk.len() * (1 + (g.next() % 64) as usize)),
+            );
+        }
+        3 => {
+            // A number made huge: a count, a shape, a length.
+            let digits: Vec<usize> = (0..b.len()).filter(|&i| b[i].is_ascii_digit()).collect();
+            if !digits.is_empty() {
+                let i = digits[at(g, digits.len())];
+                let huge = g.pick(&["18446744073709551615", "1000000000", "99999999999999999999"]);
+                b.splice(i..i + 1, huge.bytes());
+            }
+        }
+        _ => b.extend(std::iter::repeat_n(b'9', (g.next() % 4096) as usize)),
+    }
+    b
+}
+
+/// Valid files of every format a script reads, written by the library itself (and the Gmsh
+/// mesh of the test scripts), as (name, bytes, the script line that reads it).
+fn readable_files(dir: &Path) -> Vec<(String, Vec<u8>, String)> {
+    let h = host(dir, 20.0);
+    h.run_str(
+        "w.rhai",
+        "io::write_npy(\"a.npy\", [[1.0, 2.0], [3.0, 4.0]]); io::write_csv(\"a.csv\", [\"x\", \
+         \"y\"], [[1.0], [2.0]]); io::write_json(\"a.json\", #{a: [1.0, 2.0], b: \"c\"});",
+    )
+    .expect("written");
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts/gmsh_plate.msh");
+    let gmsh = "scene::build(#{gmsh: #{path: \"a.msh\", materials: #{\"1\": \"epoxy\", \"2\": \
+                \"epoxy\"}}, crack: (), receivers: #{x_m: [1e-3]}, sources: [#{kind: \"normal\", \
+                edge: \"top\"}]});";
+    ["a.npy", "a.csv", "a.json"]
+        .iter()
+        .map(|n| {
+            let read = format!("io::read_{}(\"{n}\");", &n[2..]);
+            (
+                n.to_string(),
+                std::fs::read(dir.join(n)).expect("read"),
+                read,
+            )
+        })
+        .chain([(
+            "a.msh".into(),
+            std::fs::read(mesh).expect("mesh"),
+            gmsh.into(),
+        )])
+        .collect()
+}
+
+/// A hostile name for `trnews-script slurm`'s script: shell syntax, control characters, `%`.
+fn hostile_name(g: &mut Gen) -> String {
+    let parts = [
+        "a",
+        "$(touch PWNED)",
+        "`touch PWNED`",
+        "'",
+        "\"",
+        ";",
+        "\n",
+        "\r",
+        "%A",
+        " ",
+        "\\",
+        "$HOME",
+        "é",
+        "#SBATCH --x",
+        "&&",
+        "|",
+        ">x",
+        "*",
+    ];
+    let mut name: String = (0..1 + g.next() % 4).map(|_| g.pick(&parts)).collect();
+    name.push_str(".rhai");
+    name.replace('/', "_")
+}
+
+/// The seeded fuzz run over the files and names a run reads or writes (issue 26): mutated
+/// data files (NPY, CSV, JSON) and Gmsh meshes read by a script, mutated or replaced point
+/// files of a stored sweep, and hostile script names given to `trnews-script slurm`. Each
+/// case is `Ok` (a point file recomputed, a batch file that runs the script by its name) or a
+/// one-line error at the script position, within the time budget; nothing runs from a name.
+/// `TRNEWS_FUZZ_SEED` and `TRNEWS_FUZZ_CASES` set the run (the README gives a longer one).
+#[test]
+fn fuzz_data_point_gmsh_files_and_slurm_names() {
+    let seed: u64 = std::env::var("TRNEWS_FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(26);
+    let cases: usize = std::env::var("TRNEWS_FUZZ_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(120);
+    let budget_s = 10.0;
+    let dir = TempDir::new("hostile-fuzz-files");
+    let data = dir.0.join("data");
+    std::fs::create_dir_all(&data).expect("data");
+    let originals = readable_files(&data);
+    let h = Host::new(HostOptions {
+        out_dir: dir.0.join("out"),
+        data_dir: Some(data.clone()),
+        quiet: true,
+        max_operations: 20_000_000,
+        time_limit: Some(Duration::from_secs_f64(budget_s)),
+        ..HostOptions::default()
+    })
+    .expect("host");
+    let sweep = "let v = study::sweep(\"s\", #{}, [1, 2, 3], |p| #{x: p * 0.5, y: [p]}); \
+                 if v[2].x != 1.5 || v[0].y[0] != 1 { throw \"wrong value read back\"; }";
+    h.run_str("fuzz.rhai", sweep).expect("sweep stored");
+    let points: Vec<PathBuf> = files(&dir.0.join("out/points"));
+    assert_eq!(points.len(), 3);
+    let point_bytes: Vec<Vec<u8>> = points.iter().map(|p| std::fs::read(p).unwrap()).collect();
+    let marker = dir.0.join("PWNED");
+    let mut g = Gen(seed);
+    let start = Instant::now();
+    let (mut ok, mut errors) = (0, 0);
+    for i in 0..cases {
+        let t = Instant::now();
+        let (what, result) = match g.next() % 3 {
+            0 => {
+                let (name, bytes, read) = &originals[(g.next() % 4) as usize];
+                std::fs::write(data.join(name), mutate(&mut g, bytes)).expect("mutated");
+                let result = h.run_str("fuzz.rhai", read).map_err(|e| e.to_string());
+                (format!("{name} mutated"), result)
+            }
+            1 => {
+                let k = (g.next() % 3) as usize;
+                let _ = std::fs::remove_file(&points[k]);
+                if g.next() % 4 == 0 {
+                    let made = std::process::Command::new("mkfifo")
+                        .arg(&points[k])
+                        .status();
+                    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+                } else {
+                    std::fs::write(&points[k], mutate(&mut g, &point_bytes[k])).expect("point");
+                }
+                let result = h.run_str("fuzz.rhai", sweep).map_err(|e| e.to_string());
+                ("a point file".into(), result)
+            }
+            _ => {
+                let name = hostile_name(&mut g);
+                let o = std::process::Command::new(env!("CARGO_BIN_EXE_trnews-script"))
+                    .current_dir(&dir.0)
+                    .arg("slurm")
+                    .arg(dir.script(&name, "print(\"ran\");"))
+                    .args(["--array", "1", "--out", "slurm-out"])
+                    .output()
+                    .expect("slurm");
+                let batch = files(&dir.0.join("slurm-out/slurm"))
+                    .into_iter()
+                    .find(|p| p.to_string_lossy().ends_with("-array.sbatch"));
+                let result = match (o.status.success(), batch) {
+                    (true, Some(batch)) => {
+                        let ran = std::process::Command::new("bash")
+                            .arg(&batch)
+                            .current_dir(&dir.0)
+                            .env("SLURM_ARRAY_TASK_ID", "0")
+                            .env("SLURM_ARRAY_TASK_COUNT", "1")
+                            .output()
+                            .expect("bash");
+                        let said = String::from_utf8_lossy(&ran.stderr);
+                        assert!(
+                            ran.status.success() && said.contains("] ran"),
+                            "case {i} (seed {seed}) {name:?}: {ran:?}"
+                        );
+                        Ok(())
+                    }
+                    (false, None) => {
+                        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+                        assert!(err.contains("control character"), "{name:?}: {err}");
+                        Err(err)
+                    }
+                    other => panic!("case {i} (seed {seed}) {name:?}: {o:?} {other:?}"),
+                };
+                let _ = std::fs::remove_dir_all(dir.0.join("slurm-out"));
+                assert!(
+                    !marker.exists(),
+                    "case {i} (seed {seed}): a name ran: {name:?}"
+                );
+                (format!("slurm name {name:?}"), result)
+            }
+        };
+        match result {
+            Ok(()) => ok += 1,
+            Err(msg) => {
+                errors += 1;
+                assert!(
+                    !msg.contains("internal error") && !msg.contains("panicked"),
+                    "case {i} (seed {seed}): {what}\n  -> {msg}"
+                );
+                assert!(
+                    msg.starts_with("fuzz.rhai:1:") || what.starts_with("slurm"),
+                    "case {i} (seed {seed}): {what}: no position: {msg}"
+                );
+            }
+        }
+        assert!(
+            t.elapsed().as_secs_f64() < budget_s + 5.0,
+            "case {i} (seed {seed}) hung: {what}"
+        );
+    }
+    assert_finite_files(&dir.0.join("out"));
+    eprintln!(
+        "fuzz (files and names): seed {seed}, {cases} cases ({ok} ran, {errors} errors) in \
+         {:.1} s",
         start.elapsed().as_secs_f64()
     );
 }

@@ -178,3 +178,54 @@ fn cracked_sweep_is_bit_identical_for_any_thread_count() {
     };
     assert_eq!(bits(sweep(1)), bits(sweep(2)));
 }
+
+#[test]
+fn time_and_memory_limits_hold_on_the_workers_of_a_parallel_pass_and_delayed_sweep() {
+    use std::time::Duration;
+    use trnews::budget::{self, Stop};
+    use trnews::Error;
+    // Two transmissions, each simulated on a rayon worker (this test's thread is not one of
+    // the pool's, so it runs none of them): the limits set here must reach the workers.
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build_global()
+        .ok();
+    let scene = small(true);
+    let responder = Responder::simulating(scene.clone());
+    let tr = tr_news(&responder, &spec()).unwrap();
+    let chirp = TrNewsSpec::smoke()
+        .chirp
+        .signal(responder.dt_s(), 50e3)
+        .unwrap();
+    let pass = || responder.respond_all(&[chirp.clone(), chirp.scale(-1.0).unwrap()], 20e-6);
+    let delayed = || {
+        delayed_tr_news(
+            &responder,
+            &tr,
+            &tr.focus[0],
+            &[(vec![0.0, 1e-6], vec![0.5, 0.5])],
+            5e-6,
+        )
+    };
+
+    budget::start(Some(Duration::from_nanos(1)));
+    std::thread::sleep(Duration::from_millis(2));
+    for (what, result) in [("pass", pass().map(drop)), ("delayed", delayed().map(drop))] {
+        assert!(
+            matches!(result, Err(Error::Stopped(Stop::TimeLimit(_)))),
+            "{what}: the time limit did not stop the workers: {result:?}"
+        );
+    }
+    budget::start(None);
+
+    budget::set_memory_limit(1 << 10);
+    for (what, result) in [("pass", pass().map(drop)), ("delayed", delayed().map(drop))] {
+        let refused = result.err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(
+            refused.contains("above the limit of 1.000 KiB"),
+            "{what}: the memory limit did not hold on the workers: {refused}"
+        );
+    }
+    budget::set_memory_limit(budget::DEFAULT_MEMORY_LIMIT);
+    assert!(pass().is_ok(), "the limits are lifted again");
+}

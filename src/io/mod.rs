@@ -18,14 +18,14 @@ pub(crate) mod tests;
 #[cfg(feature = "io")]
 pub mod vtu;
 
-pub use atomic::{commit_temp, ensure_parent_dir, read_existing, temp_sibling, write_atomic};
+pub use atomic::{ensure_parent_dir, read_existing, write_atomic};
 #[cfg(feature = "io")]
 pub use csv::{fmt_f64, write_csv, write_csv_rows};
 pub use json::write_json;
 pub use npy::write_npy;
 #[cfg(feature = "io")]
 pub use pvd::write_pvd;
-pub use root::{active_root, OutputRoot};
+pub use root::{active_root, without_root, OutputRoot};
 #[cfg(feature = "io")]
 pub use vtu::write_vtu;
 

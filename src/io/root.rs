@@ -1,9 +1,8 @@
 //! The output root: a directory opened once, beneath which every write of a script goes.
 
-use super::atomic::{remove_stale_temps, temp_sibling};
+use super::atomic::write_whole;
 use super::OutputError;
 use std::fs;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -113,35 +112,27 @@ impl OutputRoot {
                 .try_clone()
                 .map_err(|e| escape(e, "open directory", &self.path))?,
         };
-        remove_stale_temps(
-            || {
-                dir.entries()
-                    .ok()
-                    .into_iter()
-                    .flatten()
-                    .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
-            },
-            Path::new(name),
-            |stale| {
-                let _ = dir.remove_file(stale);
-            },
-        );
-        let tmp = temp_sibling(Path::new(name));
-        let written = dir.create(&tmp).and_then(|mut f| f.write_all(bytes));
-        if let Err(e) = written {
-            let _ = dir.remove_file(&tmp);
-            return Err(escape(e, "write", path));
-        }
-        dir.rename(&tmp, &dir, name).map_err(|e| {
-            let _ = dir.remove_file(&tmp);
-            escape(e, "rename temporary file onto", path)
-        })
+        write_whole(&dir, Path::new(name), bytes).map_err(|e| escape(e, "write", path))
     }
 }
 
 thread_local! {
     /// The output root active on this thread (see [`OutputRoot::within`]).
     static ACTIVE_ROOT: std::cell::RefCell<Option<OutputRoot>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` with no output root active on the current thread (writes are then not confined),
+/// the previous one restored afterwards, also on panic.
+pub fn without_root<T>(f: impl FnOnce() -> T) -> T {
+    struct Restore(Option<OutputRoot>);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            let old = self.0.take();
+            ACTIVE_ROOT.with(|r| *r.borrow_mut() = old);
+        }
+    }
+    let _restore = Restore(ACTIVE_ROOT.with(|r| r.borrow_mut().take()));
+    f()
 }
 
 /// The output root active on this thread, if any.

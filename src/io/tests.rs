@@ -55,6 +55,91 @@ fn atomic_write_replaces_and_leaves_no_temp() {
     );
 }
 
+/// A symlink where the target goes is replaced by the file, never followed: the file it
+/// points to (outside, say) keeps its bytes. Written with and without an output root.
+#[cfg(unix)]
+#[test]
+fn atomic_write_replaces_a_symlink_and_never_writes_through_it() {
+    let dir = temp_dir("atomic-link");
+    let victim = dir.join("victim.txt");
+    fs::write(&victim, b"precious").expect("victim");
+    let inside = dir.join("out");
+    fs::create_dir_all(&inside).expect("out");
+    for (i, root) in [None, Some(OutputRoot::open(&inside).expect("root"))]
+        .into_iter()
+        .enumerate()
+    {
+        let link = inside.join(format!("x{i}.csv"));
+        std::os::unix::fs::symlink(&victim, &link).expect("link");
+        let write = || write_atomic(&link, b"new");
+        match &root {
+            Some(r) => r.within(write),
+            None => write(),
+        }
+        .expect("write");
+        assert!(!link.is_symlink(), "the link was not replaced");
+        assert_eq!(fs::read(&link).expect("read"), b"new");
+        assert_eq!(fs::read(&victim).expect("victim"), b"precious");
+    }
+}
+
+/// Two temporary names of one target differ, keep the extension and hide the file.
+#[test]
+fn temporary_names_are_random_hidden_siblings() {
+    let a = super::atomic::temp_name(Path::new("fig.svg"));
+    let b = super::atomic::temp_name(Path::new("fig.svg"));
+    assert_ne!(a, b);
+    for t in [&a, &b] {
+        assert!(t.starts_with(".fig.tmp-") && t.ends_with(".svg"), "{t}");
+        assert_eq!(t.len(), ".fig.tmp-".len() + 16 + ".svg".len(), "{t}");
+    }
+}
+
+/// The stale sweep removes only what it can prove dead: an hour-old temporary file whose lock
+/// is free. A locked one (a live writer, on this host or another sharing the file system), a
+/// fresh one (a writer whose locks this host may not see), a FIFO and a symlink under a
+/// temporary name all stay, and nothing blocks.
+#[cfg(unix)]
+#[test]
+fn stale_sweep_removes_only_old_unlocked_temporaries() {
+    let dir = temp_dir("atomic-stale");
+    let old = std::time::SystemTime::now() - std::time::Duration::from_secs(7200);
+    let make = |name: &str, aged: bool| {
+        let p = dir.join(name);
+        fs::write(&p, b"half").expect("temp");
+        let f = fs::File::options().write(true).open(&p).expect("open");
+        if aged {
+            f.set_modified(old).expect("age");
+        }
+        f
+    };
+    drop(make(".x.tmp-0123456789abcdef.csv", true));
+    let live = make(".x.tmp-1111111111111111.csv", true);
+    live.lock().expect("a live writer's lock");
+    drop(make(".x.tmp-2222222222222222.csv", false));
+    drop(make(".x.tmp-777-3.csv", true));
+    drop(make(".y.tmp-3333333333333333.csv", true));
+    let fifo = dir.join(".x.tmp-4444444444444444.csv");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    std::os::unix::fs::symlink(dir.join("nowhere"), dir.join(".x.tmp-5555555555555555.csv"))
+        .expect("link");
+    write_atomic(&dir.join("x.csv"), b"whole").expect("write");
+    let mut left = entries(&dir);
+    left.retain(|n| n != "x.csv");
+    let mut expected = vec![
+        ".x.tmp-1111111111111111.csv",
+        ".x.tmp-2222222222222222.csv",
+        ".x.tmp-5555555555555555.csv",
+        ".y.tmp-3333333333333333.csv",
+    ];
+    if made.is_ok_and(|s| s.success()) {
+        expected.push(".x.tmp-4444444444444444.csv");
+    }
+    expected.sort();
+    assert_eq!(left, expected);
+    drop(live);
+}
+
 #[test]
 fn atomic_write_error_names_path() {
     let dir = temp_dir("atomic-err");

@@ -11,8 +11,11 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 /// A plain script value: what a `study::sweep` point, its inputs and its result may be.
-/// Stored bit-exactly (floats as their 8 bytes) and keyed canonically (maps sorted).
+/// Stored bit-exactly (floats as their 8 bytes) and keyed canonically (maps sorted), as a flat
+/// list of [`Token`]s, so that a stored value is decoded without recursion: a forged point
+/// file nested a million deep is refused at [`MAX_DEPTH`], never a stack overflow.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(into = "Vec<Token>", try_from = "Vec<Token>")]
 pub enum Plain {
     /// `()`.
     Unit,
@@ -30,10 +33,153 @@ pub enum Plain {
     Map(BTreeMap<String, Plain>),
 }
 
+/// Deepest nesting of arrays and maps in a plain value.
+pub const MAX_DEPTH: usize = 64;
+
+/// One token of a [`Plain`] value in pre-order: a container token gives its length, and its
+/// elements (a map's as key, value) follow.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub enum Token {
+    /// `()`.
+    Unit,
+    /// A bool.
+    Bool(bool),
+    /// An integer.
+    Int(INT),
+    /// A float.
+    Float(f64),
+    /// A string.
+    Text(String),
+    /// An array of this many values.
+    List(u64),
+    /// A map of this many entries.
+    Map(u64),
+    /// A map entry's key, before its value.
+    Key(String),
+}
+
+impl From<Plain> for Vec<Token> {
+    fn from(value: Plain) -> Vec<Token> {
+        fn push(value: Plain, tokens: &mut Vec<Token>) {
+            match value {
+                Plain::Unit => tokens.push(Token::Unit),
+                Plain::Bool(b) => tokens.push(Token::Bool(b)),
+                Plain::Int(i) => tokens.push(Token::Int(i)),
+                Plain::Float(f) => tokens.push(Token::Float(f)),
+                Plain::Text(t) => tokens.push(Token::Text(t)),
+                Plain::List(l) => {
+                    tokens.push(Token::List(l.len() as u64));
+                    l.into_iter().for_each(|v| push(v, tokens));
+                }
+                Plain::Map(m) => {
+                    tokens.push(Token::Map(m.len() as u64));
+                    for (k, v) in m {
+                        tokens.push(Token::Key(k));
+                        push(v, tokens);
+                    }
+                }
+            }
+        }
+        let mut tokens = Vec::new();
+        push(value, &mut tokens);
+        tokens
+    }
+}
+
+/// A container still being filled while tokens are read: its length, and its entries so far
+/// (a map's with the key awaiting its value).
+enum Open {
+    List(u64, Vec<Plain>),
+    Map(u64, Option<String>, BTreeMap<String, Plain>),
+}
+
+impl TryFrom<Vec<Token>> for Plain {
+    type Error = String;
+
+    /// Rebuilds the value with an explicit stack of open containers (no recursion), refusing
+    /// nesting deeper than [`MAX_DEPTH`], a NaN, a repeated key, and tokens out of place.
+    fn try_from(tokens: Vec<Token>) -> Result<Plain, String> {
+        let mut stack: Vec<Open> = Vec::new();
+        let mut tokens = tokens.into_iter();
+        loop {
+            let token = tokens
+                .next()
+                .ok_or("a plain value ends inside a container")?;
+            let mut done = match token {
+                Token::List(0) => Some(Plain::List(Vec::new())),
+                Token::Map(0) => Some(Plain::Map(BTreeMap::new())),
+                Token::List(n) | Token::Map(n) if stack.len() >= MAX_DEPTH => {
+                    return Err(format!(
+                        "a plain value nests deeper than {MAX_DEPTH} (a container of {n})"
+                    ))
+                }
+                Token::List(n) => {
+                    stack.push(Open::List(n, Vec::new()));
+                    None
+                }
+                Token::Map(n) => {
+                    stack.push(Open::Map(n, None, BTreeMap::new()));
+                    None
+                }
+                Token::Key(k) => match stack.last_mut() {
+                    Some(Open::Map(_, key @ None, _)) => {
+                        *key = Some(k);
+                        None
+                    }
+                    _ => return Err(format!("a plain value has the key '{k}' out of place")),
+                },
+                Token::Float(f) if f.is_nan() => return Err("a plain value holds a NaN".into()),
+                Token::Unit => Some(Plain::Unit),
+                Token::Bool(b) => Some(Plain::Bool(b)),
+                Token::Int(i) => Some(Plain::Int(i)),
+                Token::Float(f) => Some(Plain::Float(f)),
+                Token::Text(t) => Some(Plain::Text(t)),
+            };
+            // A finished value goes into the innermost open container, which may finish too.
+            while let Some(value) = done.take() {
+                let full = match stack.last_mut() {
+                    None if tokens.next().is_none() => return Ok(value),
+                    None => return Err("a plain value is followed by more tokens".into()),
+                    Some(Open::List(n, items)) => {
+                        items.push(value);
+                        items.len() as u64 == *n
+                    }
+                    Some(Open::Map(n, key, items)) => {
+                        let k = key.take().ok_or("a plain map value has no key")?;
+                        if items.contains_key(&k) {
+                            return Err(format!("a plain map repeats the key '{k}'"));
+                        }
+                        items.insert(k, value);
+                        items.len() as u64 == *n
+                    }
+                };
+                if full {
+                    done = stack.pop().map(|open| match open {
+                        Open::List(_, items) => Plain::List(items),
+                        Open::Map(_, _, items) => Plain::Map(items),
+                    });
+                }
+            }
+        }
+    }
+}
+
 impl Plain {
     /// `value` as plain data; `what` names it in the error for anything else (a Signal, a
-    /// Scene: results that cannot be stored are refused, not dropped).
+    /// Scene: results that cannot be stored are refused, not dropped), for a NaN, and for
+    /// nesting deeper than [`MAX_DEPTH`].
     pub fn of(value: &Dynamic, what: &str) -> Result<Plain, String> {
+        Plain::nested(value, what, 0)
+    }
+
+    fn nested(value: &Dynamic, what: &str, depth: usize) -> Result<Plain, String> {
+        let is_container = value.is_array() || value.is_map();
+        if is_container && depth >= MAX_DEPTH {
+            return Err(format!(
+                "{what} nests arrays or maps deeper than {MAX_DEPTH}: a sweep stores plain \
+                 values of at most that depth"
+            ));
+        }
         if value.is_unit() {
             Ok(Plain::Unit)
         } else if let Ok(b) = value.as_bool() {
@@ -41,18 +187,24 @@ impl Plain {
         } else if let Ok(i) = value.as_int() {
             Ok(Plain::Int(i))
         } else if let Ok(f) = value.as_float() {
+            if f.is_nan() {
+                return Err(format!("{what} is NaN: a sweep stores numbers only"));
+            }
             Ok(Plain::Float(f))
         } else if value.is_string() {
             Ok(Plain::Text(value.to_string()))
         } else if let Some(list) = value.read_lock::<Array>() {
             list.iter()
                 .enumerate()
-                .map(|(i, v)| Plain::of(v, &format!("{what}[{i}]")))
+                .map(|(i, v)| Plain::nested(v, &format!("{what}[{i}]"), depth + 1))
                 .collect::<Result<_, _>>()
                 .map(Plain::List)
         } else if let Some(map) = value.read_lock::<Map>() {
             map.iter()
-                .map(|(k, v)| Ok((k.to_string(), Plain::of(v, &format!("{what}.{k}"))?)))
+                .map(|(k, v)| {
+                    let v = Plain::nested(v, &format!("{what}.{k}"), depth + 1)?;
+                    Ok((k.to_string(), v))
+                })
                 .collect::<Result<_, String>>()
                 .map(Plain::Map)
         } else {
@@ -110,7 +262,7 @@ fn sweep(
             })
         })
         .collect::<Result<Vec<_>, Box<rhai::EvalAltResult>>>()?;
-    let sweep = Sweep::start(&format!("sweep '{name}'"), "sweep", specs);
+    let sweep = Sweep::start::<Plain>(&format!("sweep '{name}'"), "sweep", specs);
     for &i in sweep.pending() {
         let start = std::time::Instant::now();
         let outcome = match f.call_within_context::<Dynamic>(ctx, (points[i].clone(),)) {
@@ -235,5 +387,59 @@ impl<'a> WorkPrecisionRow<'a> {
             run_time_s: RoundTrip(p.run_time_s),
             energy_residual_peak: RoundTrip(p.report.energy_residual_peak),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Plain, Token, MAX_DEPTH};
+    use crate::sweep::{decode, encode};
+
+    fn nested(depth: usize) -> Vec<Token> {
+        let mut tokens = vec![Token::List(1); depth];
+        tokens.push(Token::Float(1.5));
+        tokens
+    }
+
+    #[test]
+    fn plain_values_round_trip_through_their_tokens() {
+        let value = Plain::Map(
+            [
+                (
+                    "a".to_string(),
+                    Plain::List(vec![Plain::Int(3), Plain::Unit]),
+                ),
+                ("b".to_string(), Plain::Map(Default::default())),
+                ("c".to_string(), Plain::Float(-0.0)),
+            ]
+            .into(),
+        );
+        let back: Plain = decode(&encode(&value).unwrap()).unwrap();
+        assert_eq!(format!("{back:?}"), format!("{value:?}"));
+        let deepest: Plain = decode(&encode(&nested(MAX_DEPTH)).unwrap()).unwrap();
+        assert!(matches!(deepest, Plain::List(_)));
+    }
+
+    /// Forged point contents: decoded without recursion and refused (postcard keeps no
+    /// message of a refusal, so the reasons are checked on the tokens directly).
+    #[test]
+    fn forged_plain_values_are_refused_not_overflowed() {
+        let refused = |tokens: Vec<Token>| {
+            assert!(decode::<Plain>(&encode(&tokens).unwrap()).is_err());
+            Plain::try_from(tokens).err().unwrap_or_default()
+        };
+        assert!(refused(nested(1_000_000)).contains("deeper than 64"));
+        assert!(refused(vec![Token::Float(f64::NAN)]).contains("NaN"));
+        assert!(refused(vec![Token::List(u64::MAX), Token::Unit]).contains("ends inside"));
+        let repeated = vec![
+            Token::Map(2),
+            Token::Key("k".into()),
+            Token::Unit,
+            Token::Key("k".into()),
+            Token::Unit,
+        ];
+        assert!(refused(repeated).contains("repeats the key 'k'"));
+        assert!(refused(vec![Token::Map(1), Token::Unit]).contains("no key"));
+        assert!(refused(vec![Token::Unit, Token::Unit]).contains("followed by more"));
     }
 }

@@ -225,7 +225,6 @@ fn delayed_sweep(
 ) -> ScriptResult<Vec<Delayed>> {
     use crate::script::WithPosition;
     use crate::sweep::{Key, PointSpec, Sweep};
-    use rayon::prelude::*;
     if crate::lab::to_record_of(r).is_some() {
         // A lab's recordings are looked up, not simulated: every point at once, so that one
         // run lists every delayed drive still to record.
@@ -271,31 +270,22 @@ fn delayed_sweep(
         "convolved or recorded"
     };
     let name = format!("delayed TR-NEWS at receiver {} ({how})", focus.receiver);
-    let sweep = Sweep::start(&name, "delayed", specs);
-    sweep
-        .pending()
-        .par_iter()
-        .try_for_each(|&i| {
-            let start = std::time::Instant::now();
-            let one = &points[i..=i];
-            let outcome = crate::trnews::delayed_tr_news_within(
-                r,
-                tr,
-                focus,
-                one,
-                half_window_s,
-                max_delay_s,
-            )
-            .map(|mut v| v.remove(0));
-            let note = outcome
-                .as_ref()
-                .ok()
-                .and_then(|d| d.report.as_ref())
-                .map(report_note)
-                .unwrap_or_default();
-            sweep.record(i, outcome, start.elapsed().as_secs_f64(), &note)
-        })
-        .at(ctx)?;
+    let sweep = Sweep::start::<Delayed>(&name, "delayed", specs);
+    crate::parallel::try_for_each(sweep.pending(), |&i| {
+        let start = std::time::Instant::now();
+        let one = &points[i..=i];
+        let outcome =
+            crate::trnews::delayed_tr_news_within(r, tr, focus, one, half_window_s, max_delay_s)
+                .map(|mut v| v.remove(0));
+        let note = outcome
+            .as_ref()
+            .ok()
+            .and_then(|d| d.report.as_ref())
+            .map(report_note)
+            .unwrap_or_default();
+        sweep.record(i, outcome, start.elapsed().as_secs_f64(), &note)
+    })
+    .at(ctx)?;
     sweep
         .finish()
         .map_err(|e| crate::script::sweep_error(ctx, e))

@@ -32,6 +32,9 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
+mod nan;
+pub use nan::refuse_nan;
+
 /// First bytes of every point file's payload: the layout version of [`PointFile`].
 const FORMAT: &str = "trnews-point 1";
 /// Directory of the point files under the output directory.
@@ -192,6 +195,21 @@ enum Found {
     Corrupt(String),
 }
 
+impl Found {
+    /// A stored value that does not decode as a `T`, or holds a NaN, is corrupt: a checksum
+    /// finds corruption, not a forged file (see [`refuse_nan`]).
+    fn checked<T: Serialize + DeserializeOwned>(self) -> Found {
+        let Found::Done(bytes) = self else {
+            return self;
+        };
+        match decode::<T>(&bytes).map(|v| refuse_nan(&v)) {
+            Ok(Ok(())) => Found::Done(bytes),
+            Ok(Err(why)) => Found::Corrupt(format!("its value {why}")),
+            Err(e) => Found::Corrupt(format!("unreadable: {e}")),
+        }
+    }
+}
+
 /// Encodes a value with postcard (f64 as its 8 bytes).
 pub fn encode<T: Serialize>(value: &T) -> Result<Vec<u8>> {
     postcard::to_stdvec(value).map_err(|e| Error::Named(format!("cannot encode a point: {e}")))
@@ -225,13 +243,13 @@ thread_local! {
 }
 
 /// The store active on this thread, if any.
-fn active() -> Option<Arc<Store>> {
+pub(crate) fn active_store() -> Option<Arc<Store>> {
     ACTIVE.with(|a| a.borrow().clone())
 }
 
 /// Runs `f` with `store` active on this thread, the previous one restored afterwards (also on
 /// panic).
-fn with_active<T>(store: Option<Arc<Store>>, f: impl FnOnce() -> T) -> T {
+pub(crate) fn with_store<T>(store: Option<Arc<Store>>, f: impl FnOnce() -> T) -> T {
     struct Restore(Option<Arc<Store>>);
     impl Drop for Restore {
         fn drop(&mut self) {
@@ -246,7 +264,7 @@ fn with_active<T>(store: Option<Arc<Store>>, f: impl FnOnce() -> T) -> T {
 
 /// Runs `f` with no store active: its first passes are computed and not stored (timing).
 pub fn without_store<T>(f: impl FnOnce() -> T) -> T {
-    with_active(None, f)
+    with_store(None, f)
 }
 
 impl Store {
@@ -274,7 +292,7 @@ impl Store {
     /// Runs `f` with this store active on the current thread (sweeps and first passes
     /// started by `f` use it); the previous one is restored afterwards, also on panic.
     pub fn within<T>(self: &Arc<Self>, f: impl FnOnce() -> T) -> T {
-        with_active(Some(Arc::clone(self)), f)
+        with_store(Some(Arc::clone(self)), f)
     }
 
     fn path(&self, kind: &str, key: &Key) -> PathBuf {
@@ -296,7 +314,8 @@ impl Store {
     /// What the file of `key` holds: checked against its checksum and key.
     fn load(&self, kind: &str, key: &Key) -> Found {
         let path = self.path(kind, key);
-        let bytes = match self.through_root(|| crate::io::read_existing(&path)) {
+        let limit = crate::budget::memory_limit() / 2;
+        let bytes = match self.through_root(|| crate::io::read_existing(&path, limit)) {
             Ok(Some(bytes)) => bytes,
             Ok(None) => return Found::Missing,
             Err(e) => return Found::Corrupt(e.to_string()),
@@ -354,21 +373,15 @@ where
     T: Serialize + DeserializeOwned,
     I: Serialize + ?Sized,
 {
-    let Some(store) = active() else {
+    let Some(store) = active_store() else {
         return compute();
     };
     let key = Key::of(kind, inputs)?;
-    match store.load(kind, &key) {
-        Found::Done(bytes) => match decode(&bytes) {
-            Ok(value) => {
-                (store.say)(&format!("{label}: read from {}", store.shown(kind, &key)));
-                return Ok(value);
-            }
-            Err(e) => (store.say)(&format!(
-                "{label}: {} is unreadable ({e}); recomputing",
-                store.shown(kind, &key)
-            )),
-        },
+    match store.load(kind, &key).checked::<T>() {
+        Found::Done(bytes) => {
+            (store.say)(&format!("{label}: read from {}", store.shown(kind, &key)));
+            return decode(&bytes);
+        }
         Found::Corrupt(why) => (store.say)(&format!(
             "{label}: {} is corrupt ({why}); recomputing",
             store.shown(kind, &key)
@@ -450,15 +463,19 @@ pub struct Sweep {
 impl Sweep {
     /// Looks every point up in the active store (reporting corrupt files, which are
     /// recomputed) and decides which ones this process computes.
-    pub fn start(name: &str, kind: &str, points: Vec<PointSpec>) -> Sweep {
-        let store = active();
+    pub fn start<T: Serialize + DeserializeOwned>(
+        name: &str,
+        kind: &str,
+        points: Vec<PointSpec>,
+    ) -> Sweep {
+        let store = active_store();
         let role = store.as_ref().map_or(Role::Whole, |s| s.role);
         let mut slots = Vec::with_capacity(points.len());
         let mut pending = Vec::new();
         for (i, p) in points.iter().enumerate() {
             let found = store
                 .as_ref()
-                .map_or(Found::Missing, |s| s.load(kind, &p.key));
+                .map_or(Found::Missing, |s| s.load(kind, &p.key).checked::<T>());
             let slot = match found {
                 Found::Done(bytes) => Slot::Done(bytes),
                 Found::Failed(error) => Slot::Failed(error),
@@ -527,6 +544,11 @@ impl Sweep {
             self.points.len(),
             p.label
         );
+        let outcome = outcome.and_then(|value| {
+            refuse_nan(&value)
+                .map(|()| value)
+                .map_err(|why| Error::Named(format!("the result {why}")))
+        });
         let (slot, line, stored) = match outcome {
             Ok(value) => {
                 let bytes = encode(&value)?;
@@ -728,7 +750,7 @@ mod tests {
         };
         let run = || {
             store.within(|| {
-                let sweep = Sweep::start("unit", "unit", points(3));
+                let sweep = Sweep::start::<f64>("unit", "unit", points(3));
                 let pending = sweep.pending().to_vec();
                 for &i in &pending {
                     sweep.record(i, Ok(i as f64 * 0.1), 0.0, "").unwrap();
@@ -754,6 +776,44 @@ mod tests {
             said.contains("point 1/3 [p0]") && said.contains("is corrupt (checksum mismatch"),
             "{said}"
         );
+        // A forged point (a NaN under a valid checksum) and a FIFO in place of a point file:
+        // both refused, without blocking, and recomputed.
+        let nan = Outcome::Done(encode(&f64::NAN).unwrap());
+        store
+            .save("unit", &Key::of("unit", &1).unwrap(), "p1", nan)
+            .unwrap();
+        std::fs::remove_file(file(2)).unwrap();
+        let fifo = std::process::Command::new("mkfifo").arg(file(2)).status();
+        let fifo = fifo.is_ok_and(|s| s.success());
+        let (again, values) = run();
+        assert_eq!(again, vec![1, 2]);
+        assert_eq!(values, vec![0.0, 0.1, 0.2]);
+        let said = lines.lock().unwrap().join("\n");
+        assert!(said.contains("[p1]: points/unit/"), "{said}");
+        assert!(
+            said.contains("is corrupt (its value holds a NaN)"),
+            "{said}"
+        );
+        if fifo {
+            assert!(said.contains("not a regular file"), "{said}");
+        }
+        // A point file larger than half the memory limit is refused before it is read.
+        crate::budget::set_memory_limit(64);
+        let (again, _) = run();
+        crate::budget::set_memory_limit(crate::budget::DEFAULT_MEMORY_LIMIT);
+        assert_eq!(again, vec![0, 1, 2]);
+        assert!(lines
+            .lock()
+            .unwrap()
+            .join("\n")
+            .contains("is larger than the 32.000 B"));
+        // A result holding a NaN is recorded as a failure, never stored.
+        store.within(|| {
+            let sweep = Sweep::start::<f64>("nan", "nan", points(1));
+            sweep.record(0, Ok(f64::NAN), 0.0, "").unwrap();
+            let err = sweep.finish::<f64>().err().unwrap().to_string();
+            assert!(err.contains("the result holds a NaN"), "{err}");
+        });
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
