@@ -526,6 +526,57 @@ fn stale_temp_files_of_dead_writers_are_removed() {
     assert!(dir.0.join("x.csv").is_file());
 }
 
+/// The time limit stops simulations that run on rayon's workers (the thread running the script
+/// waits for them): a parallel TR-NEWS pass of two 2 ms transmissions (tens of seconds of
+/// work) and a delayed sweep whose points each simulate over a millisecond of delay, its first
+/// pass read back from the store of a previous run. Each must stop at its limit, not when the
+/// workers finish.
+#[test]
+fn time_limit_stops_parallel_passes_and_delayed_sweeps() {
+    let dir = TempDir::new("hostile-parallel-limit");
+    let script = "let r = trnews::simulating(scene::preset(\"smoke\", #{}));\n\
+        let c = signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8);\n\
+        if param(\"pass\", false) { r.respond_all([c, c.scale(-1.0)], 2e-3); }\n\
+        let tr = trnews::tr_news(r, trnews::preset_spec(\"smoke\"));\n\
+        let points = [];\n\
+        for i in 0..param(\"points\", 0) { points.push(#{delays: [0.0, 1e-3], amplitudes: [1.0, -1.0 * i]}); }\n\
+        if points.len() > 0 { trnews::delayed(r, tr, 3, points, 3e-6); }\n";
+    let (err, elapsed) = run_binary(
+        &dir.0,
+        script,
+        &["--threads", "2", "--time-limit", "1", "--set", "pass=true"],
+    );
+    assert!(
+        err.contains("t.rhai:3:") && err.contains("time limit 1 s"),
+        "{err}"
+    );
+    assert!(
+        elapsed < Duration::from_secs(10),
+        "the pass ran on: {elapsed:?}"
+    );
+    // The first pass, stored; then the delayed sweep under a limit.
+    let stored = std::process::Command::new(env!("CARGO_BIN_EXE_trnews-script"))
+        .args(["--quiet", "--threads", "2", "--out"])
+        .arg(dir.0.join("out"))
+        .arg(dir.0.join("t.rhai"))
+        .status()
+        .expect("first pass");
+    assert!(stored.success());
+    let (err, elapsed) = run_binary(
+        &dir.0,
+        script,
+        &["--threads", "2", "--time-limit", "2", "--set", "points=4"],
+    );
+    assert!(
+        err.contains("t.rhai:7:") && err.contains("time limit 2 s"),
+        "{err}"
+    );
+    assert!(
+        elapsed < Duration::from_secs(12),
+        "the sweep ran on: {elapsed:?}"
+    );
+}
+
 /// `trnews-script slurm` on scripts whose names carry shell syntax (quotes, `$(...)`,
 /// backticks, `;`) and `--set` values that do: the batch file, run by bash as a Slurm task
 /// would run it, runs the script by its name and executes nothing from a name. Names with a
