@@ -39,6 +39,10 @@ impl Default for SemSpec {
     }
 }
 
+/// Relative slack of the gap comparison: a row as tall as the elements are wide takes the order
+/// along x, whatever the last bits of its height after the laminate's sums.
+const GAP_TOLERANCE: f64 = 1e-9;
+
 /// Smallest gap between the GLL points of order `p` on an element of size `h`.
 fn smallest_gap(h: f64, p: usize) -> f64 {
     let g = Gll::new(p);
@@ -81,7 +85,7 @@ impl SemModel {
             .map(|w| {
                 (1..=spec.max_order_y.max(1))
                     .rev()
-                    .find(|&p| smallest_gap(w[1] - w[0], p) >= x_gap)
+                    .find(|&p| smallest_gap(w[1] - w[0], p) >= x_gap * (1.0 - GAP_TOLERANCE))
                     .unwrap_or(1)
             })
             .collect();

@@ -841,3 +841,19 @@ fn fused_update_matches(m: &SemModel) {
     assert_eq!(one.0, expected);
     assert_eq!(one, two);
 }
+
+/// Order 7 asked along and across square 0.5 mm elements: every row takes order 7, whatever
+/// the last bits of the row heights (before the gap test had its slack, 12 of 60 rows took 6).
+#[test]
+fn round_off_does_not_change_the_order_across() {
+    let laminate = crate::laminate::Laminate::homogeneous(material("epoxy"), 30e-3).unwrap();
+    let spec = crate::sem::SemSpec {
+        order_x: 7,
+        max_order_y: 7,
+        element_size_x_m: 0.5e-3,
+        element_size_y_m: 0.5e-3,
+    };
+    let m = SemModel::layered(&laminate, 30e-3, &spec).unwrap();
+    let orders: Vec<usize> = m.gll_y.iter().map(Gll::order).collect();
+    assert_eq!(orders, vec![7; 60]);
+}
