@@ -366,13 +366,21 @@ fn ctrl_c_stops_scripts_and_native_runs() {
              let r = s.transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{duration_s: 1e-3});\n\
              io::write_csv(\"after.csv\", [\"t\"], [[1.0]]);",
         ),
+        (
+            // Two simulations on rayon's workers, the script's thread waiting for them.
+            "parallel.rhai",
+            "let r = trnews::simulating(scene::preset(\"smoke\", #{crack: ()})); let c = \
+             signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8);\nprint(\"ready\");\n\
+             let rs = r.respond_all([c, c.scale(-1.0)], 1e-3);\n\
+             io::write_csv(\"after.csv\", [\"t\"], [[1.0]]);",
+        ),
     ];
     for (name, script) in cases {
         let path = dir.0.join(name);
         std::fs::write(&path, script).expect("script");
         let out = dir.0.join(format!("out-{name}"));
         let mut child = Command::new(env!("CARGO_BIN_EXE_trnews-script"))
-            .args(["--quiet", "--out"])
+            .args(["--quiet", "--threads", "2", "--out"])
             .arg(&out)
             .arg(&path)
             .stderr(Stdio::piped())
