@@ -105,14 +105,26 @@ fn main() -> ExitCode {
     }
 }
 
+/// Stack of the worker threads, the script's included: the 8 MiB a main thread has.
+const WORKER_STACK_BYTES: usize = 8 << 20;
+
+/// Runs the command on a thread of the worker pool (`--threads` of them, default one per
+/// core), so that the script's own thread does its share of every parallel loop: with one
+/// thread the loops run inline, with no hand-over to another thread at each step.
 fn run(cli: &Cli) -> Result<(), ScriptError> {
-    trnews::budget::install_heap_meter(heap_use);
-    if let Some(n) = cli.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()
-            .map_err(|e| ScriptError::new("--threads", e.to_string()))?;
+    if cli.threads == Some(0) {
+        return Err(ScriptError::new("--threads", "0: give at least 1 thread"));
     }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(cli.threads.unwrap_or(0))
+        .stack_size(WORKER_STACK_BYTES)
+        .build()
+        .map_err(|e| ScriptError::new("--threads", e.to_string()))?
+        .install(|| run_in_pool(cli))
+}
+
+fn run_in_pool(cli: &Cli) -> Result<(), ScriptError> {
+    trnews::budget::install_heap_meter(heap_use);
     let time_limit = match cli.time_limit {
         Some(s) if s.is_finite() && s > 0.0 => Some(Duration::from_secs_f64(s.min(1e9))),
         Some(s) => {
