@@ -1,11 +1,15 @@
 //! Normal incidence through the default experiment's 50-pair stochastic laminate, against the
-//! exact transfer-matrix solution ([`trnews::exact::NormalIncidence`]; issue #25). The strip of
-//! the laminate (rollers on the sides, absorbing bottom) under a uniform pressure pulse on the
-//! top carries the exact 1-D plane wave; its velocity below 30 pairs and below all 50, seen
-//! through the transducers' 0.2-2 MHz band on transmission and reception, is compared with
-//! the exact one by the relative L2 error. Discretisations: a resolved spectral-element
-//! reference (which shows the exact solution and the discretisations agree), the presets'
-//! spectral elements, and their linear triangles.
+//! exact transfer-matrix solution ([`trnews::exact::NormalIncidence`]; issue #25).
+//!
+//! First the exact solution itself, against closed forms: a delayed copy in a homogeneous
+//! stack, the plane-wave reflection and transmission coefficients at an interface, and the
+//! energy balance of a lossless stack. Then the strip of the laminate (rollers on the sides,
+//! absorbing bottom, uniform pressure pulse on the top), whose response is exactly the 1-D
+//! one: its velocity below 30 pairs and below all 50, seen through the transducers' 0.2-2 MHz
+//! band on transmission and reception, against the exact velocity by the relative L2 error
+//! over 30 us. A resolved spectral-element strip agrees with the exact solution to 0.01%; the
+//! presets' discretisations are 2-3.4% off (T3 paper 0.37%), almost all from the epoxy layers
+//! that the order-across rule gives one linear interval.
 
 mod common;
 use common::*;
@@ -149,8 +153,9 @@ fn exact_work_of_a_pulse_is_radiated_into_the_half_space() {
 /// within 10% of flat up to 2 MHz, so the band sees the whole 0.2-2 MHz range.
 const WIDTH: f64 = 0.05e-6;
 
-/// Recorded duration (s): the direct wave crosses the stack in about 2.5 us, and by 30 us the
-/// exact response below 30 pairs has fallen below 1e-3 of its peak.
+/// Recorded duration (s): the direct wave crosses the stack in about 2.5 us; the stack's
+/// reverberation and the band's ringing at 0.2 MHz keep 29% of the band-limited exact
+/// response's energy (below 30 pairs) after 5 us, 0.2% after 25 us.
 const DURATION: f64 = 30e-6;
 
 /// The pairs above the first receiver.
@@ -174,26 +179,14 @@ fn receiver_depths(lam: &Laminate) -> [f64; 2] {
 
 /// One discretisation's run against the exact solution.
 struct Measured {
-    name: String,
-    nodes: usize,
-    dt_s: f64,
-    seconds: f64,
-    /// Relative L2 error in band at each receiver depth.
+    /// Relative L2 error in band at each receiver depth, over the record.
     errors: [f64; 2],
 }
 
 impl Measured {
-    fn print(&self) {
-        println!(
-            "{:<44} {:>7} nodes  dt {:.3} ns  {:>6.2} s  error {:.3}% below {PAIRS_ABOVE} pairs, \
-             {:.3}% below 50",
-            self.name,
-            self.nodes,
-            self.dt_s * 1e9,
-            self.seconds,
-            100.0 * self.errors[0],
-            100.0 * self.errors[1]
-        );
+    /// The larger of the two receivers' errors.
+    fn worst(&self) -> f64 {
+        self.errors[0].max(self.errors[1])
     }
 }
 
@@ -206,20 +199,22 @@ fn pressure(dt: f64) -> Signal {
 }
 
 /// Relative L2 error of `trace` against `exact`, both through the receiving band, over the
-/// samples they share.
-fn band_error(trace: &Signal, exact: &Signal) -> f64 {
+/// samples they share before `until`.
+fn band_error(trace: &Signal, exact: &Signal, until: f64) -> f64 {
     let band = TransducerSpec::default();
     let (a, b) = (band.receive(trace).unwrap(), band.receive(exact).unwrap());
-    rel_l2(&a.samples, &b.samples)
+    let n = ((until / a.dt_s) as usize).min(a.len()).min(b.len());
+    rel_l2(&a.samples[..n], &b.samples[..n])
 }
 
-/// Runs `strip` at the presets' step fraction of its dt_crit under the pressure pulse and
-/// compares the velocity at the receivers with the exact solution.
-fn measure(name: &str, strip: WaveStrip) -> Measured {
+/// Runs `strip` at `step_fraction` of its dt_crit under the pressure pulse, compares the
+/// velocity at the receivers with the exact solution and prints the errors (over the record
+/// and over its first 10 us), the nodes, the step and the run time.
+fn measure(name: &str, strip: WaveStrip, step_fraction: f64) -> Measured {
     let lam = stack();
     let exact = NormalIncidence::of_laminate(&lam).unwrap();
     let depths = receiver_depths(&lam);
-    let dt = STEP_FRACTION * strip.dt_crit();
+    let dt = step_fraction * strip.dt_crit();
     let load = pressure(dt);
     let source = strip.top_traction(270.0, load.clone());
     let receivers = depths.map(|d| strip.depth_receiver(d, 1));
@@ -231,20 +226,24 @@ fn measure(name: &str, strip: WaveStrip) -> Measured {
     let clock = Instant::now();
     let traces = strip.run(&[source], &receivers, &config).unwrap().traces;
     let seconds = clock.elapsed().as_secs_f64();
-    let errors = [0, 1].map(|r| band_error(&traces[r], &exact.velocity(&load, depths[r]).unwrap()));
-    let m = Measured {
-        name: name.into(),
-        nodes: strip.nodes(),
-        dt_s: dt,
-        seconds,
-        errors,
-    };
-    m.print();
-    m
+    let exact = depths.map(|d| exact.velocity(&load, d).unwrap());
+    let error = |until: f64| [0, 1].map(|r| band_error(&traces[r], &exact[r], until));
+    let (errors, early) = (error(DURATION), error(10e-6));
+    println!(
+        "{name:<46} {:>5} nodes  dt {:.3} ns  {seconds:>5.1} s  error below {PAIRS_ABOVE} / 50 \
+         pairs: {:.3}% / {:.3}% (first 10 us {:.3}% / {:.3}%)",
+        strip.nodes(),
+        dt * 1e9,
+        100.0 * errors[0],
+        100.0 * errors[1],
+        100.0 * early[0],
+        100.0 * early[1],
+    );
+    Measured { errors }
 }
 
-/// The spectral elements of a resolution preset (one element across the strip).
-fn sem_preset(resolution: Resolution) -> SemModel {
+/// The spectral elements of a resolution preset, one element across the strip.
+fn sem_preset(resolution: Resolution) -> WaveStrip {
     let p = SemPreset::of(resolution);
     let cut = SemSpec {
         order_x: p.order_x,
@@ -252,7 +251,7 @@ fn sem_preset(resolution: Resolution) -> SemModel {
         element_size_x_m: p.element_size_x_m,
         element_size_y_m: p.element_size_y_m,
     };
-    SemModel::layered(&stack(), p.element_size_x_m, &cut).unwrap()
+    sem(SemModel::layered(&stack(), p.element_size_x_m, &cut).unwrap())
 }
 
 /// The linear triangles of a resolution preset, four columns across the strip.
@@ -262,8 +261,12 @@ fn t3_preset(resolution: Resolution) -> WaveStrip {
     WaveStrip::T3(strip_of(&stack(), cells, 4, false, BottomEdge::Absorbing))
 }
 
+fn sem(m: SemModel) -> WaveStrip {
+    WaveStrip::sem(m, false, BottomEdge::Absorbing)
+}
+
 /// `m` with its element rows re-cut: a row of material `mat`, height `h` and order `p` across
-/// becomes `cut(mat, h, p) = (n, q)`: n equal rows of order q.
+/// becomes `cut(mat, h, p) = (n, q)`, n equal rows of order q across.
 fn recut(m: &SemModel, cut: impl Fn(usize, f64, usize) -> (usize, usize)) -> SemModel {
     let (mut rows, mut orders, mut materials) = (vec![m.rows_m[0]], vec![], vec![]);
     for ((w, &mat), p) in m.rows_m.windows(2).zip(&m.row_material).zip(m.row_orders()) {
@@ -272,24 +275,30 @@ fn recut(m: &SemModel, cut: impl Fn(usize, f64, usize) -> (usize, usize)) -> Sem
         orders.extend(std::iter::repeat_n(q, n));
         materials.extend(std::iter::repeat_n(mat, n));
     }
-    let order_x = m.x_nodes_m.len() / (m.columns_m.len() - 1);
-    SemModel::new(
-        m.columns_m.clone(),
-        rows,
-        order_x.max(1),
-        &orders,
-        m.materials.clone(),
-        materials,
-    )
-    .unwrap()
+    let order_x = (m.x_nodes_m.len() - 1) / (m.columns_m.len() - 1);
+    let (columns, layers) = (m.columns_m.clone(), m.materials.clone());
+    SemModel::new(columns, rows, order_x, &orders, layers, materials).unwrap()
 }
 
-/// Material index of epoxy in the stochastic laminate.
+/// Material index of epoxy in the stochastic laminate ([`Laminate::stochastic`]).
 const EPOXY: usize = 0;
 
-/// The resolved reference: every layer cut into rows no taller than `row`, order `order`
-/// across, on one 0.5 mm element of order 1 along x (the 1-D solution does not vary along x).
-fn resolved(order: usize, row: f64) -> SemModel {
+/// The quick preset's spectral elements with each epoxy row cut into `rows` rows of order
+/// `order` across (`None`: the preset's).
+fn quick_with_epoxy(rows: usize, order: Option<usize>) -> WaveStrip {
+    let WaveStrip::Sem(quick, _) = sem_preset(Resolution::Quick) else {
+        unreachable!("sem_preset builds spectral elements")
+    };
+    sem(recut(&quick, |mat, _, p| match mat {
+        EPOXY => (rows, order.unwrap_or(p)),
+        _ => (1, p),
+    }))
+}
+
+/// The resolved reference: every layer cut into rows no taller than 0.1 mm, order 4 across
+/// (at least 70 GLL points per P wavelength at 2 MHz), on one 0.5 mm element of order 1 along
+/// x (the 1-D solution does not vary along x).
+fn resolved() -> WaveStrip {
     let one_row_per_layer = SemSpec {
         order_x: 1,
         max_order_y: 1,
@@ -297,44 +306,97 @@ fn resolved(order: usize, row: f64) -> SemModel {
         element_size_y_m: 1.0,
     };
     let m = SemModel::layered(&stack(), 0.5e-3, &one_row_per_layer).unwrap();
-    recut(&m, |_, h, _| ((h / row).ceil() as usize, order))
+    sem(recut(&m, |_, h, _| ((h / 0.1e-3).ceil() as usize, 4)))
 }
 
-fn sem(m: SemModel) -> WaveStrip {
-    WaveStrip::sem(m, false, BottomEdge::Absorbing)
-}
-
+/// The exact solution and a discretisation that resolves everything agree: the resolved
+/// reference at half dt_crit is within 0.02% of it at both receivers (measured 0.010%; at 0.9
+/// dt_crit 0.033%, at 0.25 dt_crit 0.003%: the step's second-order error, the space error is
+/// below it; order 6 or rows of 50 um reach 0.001%).
 #[test]
-#[ignore = "measurement table for issue #25 (minutes): cargo test --release --test normal_incidence -- --ignored --nocapture"]
-fn table() {
-    for (order, row) in [(8, 50e-6), (8, 25e-6), (10, 50e-6)] {
-        measure(
-            &format!("resolved: order {order}, rows <= {} um", row * 1e6),
-            sem(resolved(order, row)),
+fn exact_agrees_with_resolved_spectral_elements() {
+    let m = measure(
+        "resolved: order 4, rows <= 0.1 mm, 0.5 dt_crit",
+        resolved(),
+        0.5,
+    );
+    assert!(m.worst() < 2e-4, "{:?}", m.errors);
+}
+
+/// The presets' discretisations of the strip at their step (0.9 dt_crit), measured (issue
+/// #25: stated errors are about 2x optimistic). Regression guards, 10% above the measured
+/// errors (quick SEM 3.37%, paper SEM 2.08%, T3 quick 2.42%, T3 paper 0.37%): almost all of
+/// it is the epoxy layers' one linear interval across (see `epoxy_resolution_choices`).
+#[test]
+fn preset_discretisations_against_the_exact_solution() {
+    let guards = [
+        (
+            "quick SEM preset (order 7 on 0.5 mm)",
+            sem_preset(Resolution::Quick),
+            0.037,
+        ),
+        (
+            "paper SEM preset (order 6 on 0.25 mm)",
+            sem_preset(Resolution::Paper),
+            0.023,
+        ),
+        ("T3 quick (60 x 40 um)", t3_preset(Resolution::Quick), 0.027),
+        (
+            "T3 paper (20 x 10 um)",
+            t3_preset(Resolution::Paper),
+            0.0041,
+        ),
+    ];
+    for (name, strip, guard) in guards {
+        let m = measure(name, strip, STEP_FRACTION);
+        assert!(m.worst() <= guard, "{name}: {:?} above {guard}", m.errors);
+    }
+}
+
+/// Issue #25's targets for normal incidence through the 50-pair stack, in band: the quick
+/// preset's discretisation within 0.3%, the paper preset's within 0.1%.
+#[test]
+#[ignore = "issue #25 targets for later work: the presets give the epoxy one linear interval \
+            across and are 3.4% (quick) and 2.1% (paper) off"]
+fn presets_meet_issue_25_targets() {
+    for (resolution, target) in [(Resolution::Quick, 0.003), (Resolution::Paper, 0.001)] {
+        let m = measure(
+            &format!("{resolution:?} SEM preset"),
+            sem_preset(resolution),
+            0.9,
         );
+        assert!(m.worst() <= target, "{resolution:?}: {:?}", m.errors);
     }
-    measure("quick SEM preset", sem(sem_preset(Resolution::Quick)));
-    measure("paper SEM preset", sem(sem_preset(Resolution::Paper)));
+}
+
+/// What resolving the epoxy does to the quick preset's error, and what it costs (nodes, dt):
+/// each epoxy row cut into 2 or 4 rows, or given order 2, 3, 4 across; and the quick preset
+/// at a quarter of its step. Measured (0.9 dt_crit unless stated): preset 3.37%, 2 rows
+/// 0.73%, 4 rows 0.16%, order 2 0.26%, order 3 0.085%, order 4 0.034%; the preset at 0.25
+/// dt_crit 3.66%. Once the epoxy is resolved the step's error (0.033% at 1.05 ns, growing as
+/// dt^2) is what remains.
+#[test]
+#[ignore = "measurement for issue #25 (about a minute): cargo test --release --test \
+            normal_incidence -- --ignored epoxy_resolution_choices --nocapture"]
+fn epoxy_resolution_choices() {
+    let preset = measure("quick SEM preset", quick_with_epoxy(1, None), STEP_FRACTION);
+    measure(
+        "quick SEM preset at 0.25 dt_crit",
+        quick_with_epoxy(1, None),
+        0.25,
+    );
+    let mut last = preset.worst();
     for n in [2, 4] {
-        let m = recut(&sem_preset(Resolution::Quick), |mat, _, p| {
-            if mat == EPOXY {
-                (n, p)
-            } else {
-                (1, p)
-            }
-        });
-        measure(&format!("quick, epoxy cut into {n} rows"), sem(m));
+        let name = format!("quick, epoxy cut into {n} rows");
+        let m = measure(&name, quick_with_epoxy(n, None), STEP_FRACTION);
+        assert!(m.worst() < last, "{name}: {:?}", m.errors);
+        last = m.worst();
     }
+    let mut last = preset.worst();
     for q in [2, 3, 4] {
-        let m = recut(&sem_preset(Resolution::Quick), |mat, _, p| {
-            if mat == EPOXY {
-                (1, q)
-            } else {
-                (1, p)
-            }
-        });
-        measure(&format!("quick, epoxy at order {q} across"), sem(m));
+        let name = format!("quick, epoxy at order {q} across");
+        let m = measure(&name, quick_with_epoxy(1, Some(q)), STEP_FRACTION);
+        assert!(m.worst() < last, "{name}: {:?}", m.errors);
+        last = m.worst();
     }
-    measure("T3 quick (60 x 40 um)", t3_preset(Resolution::Quick));
-    measure("T3 paper (20 x 10 um)", t3_preset(Resolution::Paper));
 }
