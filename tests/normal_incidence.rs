@@ -371,10 +371,12 @@ fn presets_meet_issue_25_targets() {
 
 /// What resolving the epoxy does to the quick preset's error, and what it costs (nodes, dt):
 /// each epoxy row cut into 2 or 4 rows, or given order 2, 3, 4 across; and the quick preset
-/// at a quarter of its step. Measured (0.9 dt_crit unless stated): preset 3.37%, 2 rows
-/// 0.73%, 4 rows 0.16%, order 2 0.26%, order 3 0.085%, order 4 0.034%; the preset at 0.25
-/// dt_crit 3.66%. Once the epoxy is resolved the step's error (0.033% at 1.05 ns, growing as
-/// dt^2) is what remains.
+/// at a quarter of its step. Measured at 0.9 dt_crit: preset 3.37% (3.59 ns), 2 rows 0.68%
+/// (3.32 ns), 4 rows 0.16% (1.78 ns), order 2 0.29% (3.10 ns), order 3 0.086% (1.69 ns),
+/// order 4 0.034% (1.05 ns); the preset at 0.25 dt_crit 3.66% (the step's error partly
+/// cancels the epoxy's). Once the epoxy is resolved the step's error is what remains: the
+/// resolved reference is 0.033%, 0.010%, 0.003% off at 1.05, 0.58, 0.29 ns, about
+/// 0.03% (dt / 1 ns)^2, so 0.29% at order 2's 3.1 ns.
 #[test]
 #[ignore = "measurement for issue #25 (about a minute): cargo test --release --test \
             normal_incidence -- --ignored epoxy_resolution_choices --nocapture"]

@@ -205,9 +205,9 @@ pub fn causal_response(
     let damping = |j: usize| (-eta * j as f64 * input.dt_s).exp();
     let damped: Vec<f64> = (0..n).map(|j| input.samples[j] * damping(j)).collect();
     let mut spectrum = forward_real(&damped, len);
-    for k in 0..=len / 2 {
+    for (k, bin) in spectrum.iter_mut().enumerate().take(len / 2 + 1) {
         let omega = 2.0 * std::f64::consts::PI * k as f64 / period;
-        spectrum[k] *= transfer(Complex::new(omega, -eta));
+        *bin *= transfer(Complex::new(omega, -eta));
     }
     for k in len / 2 + 1..len {
         spectrum[k] = spectrum[len - k].conj();

@@ -175,6 +175,8 @@ pub enum Discretisation {
 
 /// A vertical strip as [`strip`] describes it, in either discretisation, with what the wave
 /// tests do to it: a traction on the top, receivers across the strip at a depth, a run.
+// One per test run: the variants' different sizes cost nothing.
+#[allow(clippy::large_enum_variant)]
 pub enum WaveStrip {
     /// Linear triangles.
     T3(Model),
