@@ -102,8 +102,10 @@ impl StackLayer {
 
 /// Plane P waves at normal incidence through a stack of layers over a half-space of the last
 /// layer's material (impedance-matched: nothing comes back from below the stack), driven by a
-/// uniform pressure p(t) on the top surface. Exact for the 1-D continuum (the strip with
-/// roller sides and an absorbing bottom that `tests/normal_incidence.rs` discretises).
+/// uniform pressure p(t) on the top surface. Exact for the 1-D continuum: the strip with
+/// roller sides and an absorbing bottom that `tests/normal_incidence.rs` discretises, where
+/// this solution is also checked against closed forms (a delayed copy in a homogeneous stack,
+/// the interface coefficients) and the energy balance of a lossless stack.
 ///
 /// With z the depth below the top, v the particle velocity along y (up) and sigma = sigma_yy,
 /// the equations rho dv/dt = -d sigma/dz and d sigma/dt = -C22 dv/dz, Fourier transformed
