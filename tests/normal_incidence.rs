@@ -363,7 +363,7 @@ fn presets_meet_issue_25_targets() {
         let m = measure(
             &format!("{resolution:?} SEM preset"),
             sem_preset(resolution),
-            0.9,
+            STEP_FRACTION,
         );
         assert!(m.worst() <= target, "{resolution:?}: {:?}", m.errors);
     }
