@@ -255,6 +255,11 @@ impl SemModel {
         Ok(model)
     }
 
+    /// The polynomial order across each element row, bottom row first.
+    pub fn row_orders(&self) -> Vec<usize> {
+        self.gll_y.iter().map(Gll::order).collect()
+    }
+
     /// Number of node columns.
     pub fn nx(&self) -> usize {
         self.x_nodes_m.len()

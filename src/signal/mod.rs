@@ -23,7 +23,7 @@ mod spectrum;
 
 pub use chirp::ChirpSpec;
 pub use delay::{delay, delay_and_sum, time_reverse, time_reverse_to_start};
-pub use fft::{convolve, convolve_discrete, xcorr};
+pub use fft::{causal_response, convolve, convolve_discrete, xcorr};
 pub use filter::{butterworth, filtfilt, sosfilt, Biquad, FilterKind, Sos};
 pub use hilbert::{analytic, envelope, instantaneous_frequency};
 pub use measure::{peak, relative_l2, side_lobes, Peak, SideLobes};

@@ -40,8 +40,19 @@ pub fn strip(
     shear: bool,
     bottom: BottomEdge,
 ) -> Model {
-    let lam = laminate(layers_top_down);
-    let mesh = Mesh::layered(&lam, h * columns as f64, h, h, &[], &[]).unwrap();
+    strip_of(&laminate(layers_top_down), (h, h), columns, shear, bottom)
+}
+
+/// The strip of [`strip`] for a laminate, on elements of `(width, height)` (a thin layer gets
+/// one row of its thickness).
+pub fn strip_of(
+    lam: &Laminate,
+    (width, height): (f64, f64),
+    columns: usize,
+    shear: bool,
+    bottom: BottomEdge,
+) -> Model {
+    let mesh = Mesh::layered(lam, width * columns as f64, width, height, &[], &[]).unwrap();
     let component = if shear { 1 } else { 0 };
     let mut fixed: Vec<usize> = [Side::Left, Side::Right]
         .iter()
@@ -60,7 +71,7 @@ pub fn strip(
         }
         BottomEdge::Free => vec![],
     };
-    Model::build(mesh, lam.materials, &absorbing, fixed, None).unwrap()
+    Model::build(mesh, lam.materials.clone(), &absorbing, fixed, None).unwrap()
 }
 
 #[derive(Clone, Copy)]
@@ -164,6 +175,8 @@ pub enum Discretisation {
 
 /// A vertical strip as [`strip`] describes it, in either discretisation, with what the wave
 /// tests do to it: a traction on the top, receivers across the strip at a depth, a run.
+// One per test run: the variants' different sizes cost nothing.
+#[allow(clippy::large_enum_variant)]
 pub enum WaveStrip {
     /// Linear triangles.
     T3(Model),
@@ -192,8 +205,13 @@ impl WaveStrip {
             element_size_x_m: width,
             element_size_y_m: width,
         };
-        let mut m =
-            trnews::sem::SemModel::layered(&laminate(layers_top_down), width, &cut).unwrap();
+        let m = trnews::sem::SemModel::layered(&laminate(layers_top_down), width, &cut).unwrap();
+        WaveStrip::sem(m, shear, bottom)
+    }
+
+    /// The spectral elements `m` as the strip: rollers on the sides (u_x held for P waves,
+    /// u_y for S waves) and the `bottom` edge, with the Lanczos critical step.
+    pub fn sem(mut m: trnews::sem::SemModel, shear: bool, bottom: BottomEdge) -> WaveStrip {
         let (last, lines) = (m.x_nodes_m.len() - 1, m.y_nodes_m.len());
         let held = usize::from(shear);
         m.fixed_dofs = (0..lines)
@@ -215,6 +233,22 @@ impl WaveStrip {
         }
         let dt_crit = 2.0 / m.max_eigenvalue(&free).0.sqrt();
         WaveStrip::Sem(m, dt_crit)
+    }
+
+    /// The critical step of central differences (s): the Lanczos estimate.
+    pub fn dt_crit(&self) -> f64 {
+        match self {
+            WaveStrip::T3(model) => trnews::solve::stability::estimate(model).dt_crit_s,
+            WaveStrip::Sem(_, dt_crit) => *dt_crit,
+        }
+    }
+
+    /// Number of nodes.
+    pub fn nodes(&self) -> usize {
+        match self {
+            WaveStrip::T3(model) => model.mesh.nodes.len(),
+            WaveStrip::Sem(m, _) => m.nodes(),
+        }
     }
 
     /// A uniform traction over the top in direction `angle_deg` (counter-clockwise from +x).
@@ -276,7 +310,7 @@ impl WaveStrip {
 }
 
 /// The laminate of layers listed top-down as (material, thickness).
-fn laminate(layers_top_down: &[(Material, f64)]) -> Laminate {
+pub fn laminate(layers_top_down: &[(Material, f64)]) -> Laminate {
     let materials: Vec<Material> = layers_top_down.iter().map(|l| l.0.clone()).collect();
     let layers = layers_top_down
         .iter()
