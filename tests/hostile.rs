@@ -219,6 +219,172 @@ fn gmsh_files_are_read_inside_the_script_directory_symlinks_included() {
     assert!(err.contains("link.msh") && err.contains("outside"), "{err}");
 }
 
+/// A host reading data files beneath `data` (`--data`), with the memory limit `max_memory`.
+fn data_host(out: &Path, data: &Path, max_memory: u64) -> Host {
+    Host::new(HostOptions {
+        out_dir: out.to_path_buf(),
+        data_dir: Some(data.to_path_buf()),
+        quiet: true,
+        max_operations: 20_000_000,
+        max_memory,
+        time_limit: Some(Duration::from_secs(20)),
+        ..HostOptions::default()
+    })
+    .expect("host")
+}
+
+/// Runs `script` on a thread and returns its error text, failing the test when the script
+/// runs without error or takes more than `seconds` (a blocking open would hang the thread).
+fn error_within(host: Host, script: &str, seconds: u64) -> String {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let text = script.to_string();
+    std::thread::spawn(move || {
+        let _ = tx.send(host.run_str("t.rhai", &text).err().map(|e| e.to_string()));
+    });
+    rx.recv_timeout(Duration::from_secs(seconds))
+        .unwrap_or_else(|_| panic!("no answer within {seconds} s: {script}"))
+        .unwrap_or_else(|| panic!("ran without error: {script}"))
+}
+
+/// Issue 26: a FIFO in place of a data file (a Gmsh mesh too), directly or through a symlink,
+/// is refused before it is opened (opening a FIFO for reading waits for a writer), within
+/// seconds, naming the file.
+#[cfg(unix)]
+#[test]
+fn a_fifo_in_place_of_a_data_file_is_refused_without_blocking() {
+    let dir = TempDir::new("hostile-fifo");
+    let made = std::process::Command::new("mkfifo")
+        .arg(dir.0.join("pipe.npy"))
+        .status()
+        .expect("mkfifo");
+    assert!(made.success());
+    std::os::unix::fs::symlink("pipe.npy", dir.0.join("link.csv")).expect("link");
+    let out = TempDir::new("hostile-fifo-out");
+    let cases = [
+        (r#"io::read_npy("pipe.npy");"#, "pipe.npy"),
+        (r#"io::read_csv("link.csv");"#, "link.csv"),
+        (r#"io::read_json("pipe.npy");"#, "pipe.npy"),
+        (
+            r#"scene::build(#{gmsh: #{path: "pipe.npy", materials: #{"1": "epoxy"}}, crack: ()});"#,
+            "pipe.npy",
+        ),
+    ];
+    for (script, file) in cases {
+        let t = Instant::now();
+        let err = error_within(data_host(&out.0, &dir.0, 1 << 30), script, 10);
+        assert!(
+            err.starts_with("t.rhai:1:") && err.contains(file) && err.contains("FIFO"),
+            "{script}\n  -> {err}"
+        );
+        assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
+    }
+}
+
+/// Issue 26: data files crafted against the parsers are errors naming the file and what was
+/// found, in linear time: an `.npy` header with a deeply nested structured dtype (exponential
+/// in npyz's header parser), unknown and repeated header keys, Gmsh counts that cannot fit in
+/// the file (mshio preallocates from them: 2^64 - 1 panicked, 10^9 aborted), a CSV quote never
+/// closed (read as one header cell), and a JSON key repeated in one object (the last value was
+/// kept silently).
+#[test]
+fn hostile_data_files_are_errors_naming_the_file() {
+    let dir = TempDir::new("hostile-data-files");
+    let npy = |name: &str, header: &str| {
+        let mut b = b"\x93NUMPY\x01\x00".to_vec();
+        b.extend_from_slice(&(header.len() as u16).to_le_bytes());
+        b.extend_from_slice(header.as_bytes());
+        b.extend_from_slice(&[0; 8]);
+        std::fs::write(dir.0.join(name), b).expect("npy");
+    };
+    let nested = (0..40).fold("'<f8'".to_string(), |inner, k| {
+        format!("[('f{k}', {inner})]")
+    });
+    npy(
+        "nested.npy",
+        &format!("{{'descr': {nested}, 'fortran_order': False, 'shape': (1,), }}\n"),
+    );
+    npy(
+        "extra.npy",
+        "{'descr': '<f8', 'fortran_order': False, 'shape': (1,), 'bogus': 1}\n",
+    );
+    npy(
+        "twice.npy",
+        "{'descr': '<f8', 'shape': (1,), 'fortran_order': False, 'shape': (1,)}\n",
+    );
+    let plate = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts/gmsh_plate.msh"),
+    )
+    .expect("plate");
+    for (name, from, to) in [
+        ("max.msh", "\n0 9 0 1\n", "\n0 9 0 18446744073709551615\n"),
+        (
+            "billion.msh",
+            "$Elements\n3 505 1 505\n",
+            "$Elements\n1000000000 505 1 505\n",
+        ),
+    ] {
+        assert!(plate.contains(from), "{from}");
+        std::fs::write(dir.0.join(name), plate.replacen(from, to, 1)).expect("msh");
+    }
+    std::fs::write(dir.0.join("quote.csv"), "t_s,\"u\n0,1\n1,2\n").expect("csv");
+    std::fs::write(dir.0.join("dup.json"), "{\"gain\": 1,\n \"gain\": 2}").expect("json");
+    let gmsh = |path: &str| {
+        format!("scene::build(#{{gmsh: #{{path: \"{path}\", materials: #{{\"1\": \"epoxy\", \"2\": \"epoxy\"}}}}, crack: ()}});")
+    };
+    let cases = [
+        (
+            "io::read_npy(\"nested.npy\");".to_string(),
+            vec!["nested.npy", "structured dtype"],
+        ),
+        (
+            "io::read_npy(\"extra.npy\");".into(),
+            vec!["extra.npy", "unknown header key 'bogus'"],
+        ),
+        (
+            "io::read_npy(\"twice.npy\");".into(),
+            vec!["twice.npy", "'shape' appears twice"],
+        ),
+        (
+            gmsh("max.msh"),
+            vec![
+                "max.msh",
+                "$Nodes",
+                "numNodesInBlock = 18446744073709551615",
+            ],
+        ),
+        (
+            gmsh("billion.msh"),
+            vec!["billion.msh", "$Elements", "numEntityBlocks = 1000000000"],
+        ),
+        (
+            "io::read_csv(\"quote.csv\");".into(),
+            vec!["quote.csv", "line 1", "never closed"],
+        ),
+        (
+            "io::read_json(\"dup.json\");".into(),
+            vec!["dup.json", "key \"gain\" appears twice", "line 2"],
+        ),
+    ];
+    let out = TempDir::new("hostile-data-files-out");
+    for (script, needles) in &cases {
+        let t = Instant::now();
+        let err = error_within(data_host(&out.0, &dir.0, 1 << 30), script, 20);
+        assert!(err.starts_with("t.rhai:1:"), "no position: {err}");
+        for needle in needles {
+            assert!(
+                err.contains(needle),
+                "{script}\n  -> {err}\n  (expected {needle:?})"
+            );
+        }
+        assert!(!err.contains("internal error"), "{err}");
+        assert!(
+            t.elapsed() < Duration::from_secs(5),
+            "{script}: {:?}",
+            t.elapsed()
+        );
+    }
+}
+
 /// The operation limit 0 is refused; the time limit stops a script loop and a simulation.
 #[test]
 fn budgets_stop_runaway_scripts() {
