@@ -112,6 +112,29 @@ pub fn require_positive(field: &str, value: f64) -> Result<f64> {
     }
 }
 
+/// Checks that `value` lies in the physical range `[lo, hi]` (`unit` after the bounds; `why`
+/// the range), naming `field`, the value and the range otherwise. Ranges bound finite values
+/// that no experiment has (an angle of 1e300 degrees, a modulus of 1e30 Pa), so that they are
+/// refused as input rather than carried into overflowing or meaningless arithmetic.
+pub fn require_within(
+    field: &str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+    unit: &str,
+    why: &str,
+) -> Result<f64> {
+    if value.is_finite() && (lo..=hi).contains(&value) {
+        Ok(value)
+    } else {
+        Err(Error::invalid(
+            field,
+            value,
+            format!("must be within [{lo:e}, {hi:e}] {unit} ({why})"),
+        ))
+    }
+}
+
 /// Checks that `value` is finite, naming `field` otherwise.
 pub fn require_finite(field: &str, value: f64) -> Result<f64> {
     if value.is_finite() {

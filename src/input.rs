@@ -7,6 +7,8 @@
 //! before it is read, naming its size. The parsers refuse malformed files with the file, the
 //! place (row, column, header field) and what was found; non-finite numbers are refused too.
 
+mod npy_header;
+
 use std::io::Read as _;
 use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
@@ -74,6 +76,42 @@ fn beneath(rel: &str) -> Option<&Path> {
     (!p.has_root() && plain).then_some(p)
 }
 
+/// Opens `rel` beneath `dir` for reading without blocking: with `O_NONBLOCK` on Unix, so that
+/// a FIFO put in place of a regular file opens at once (and is then refused by its
+/// `fstat`) instead of waiting for a writer. Reads of a regular file ignore the flag.
+fn open_regular(dir: &cap_std::fs::Dir, rel: &Path) -> std::io::Result<cap_std::fs::File> {
+    let mut options = cap_std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use cap_std::fs::OpenOptionsExt as _;
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    dir.open_with(rel, &options)
+}
+
+/// The refusal of a data path that is not a regular file, naming what it is.
+fn not_regular(path: &Path, kind: &cap_std::fs::FileType) -> InputError {
+    #[cfg(unix)]
+    let fifo = {
+        use cap_std::fs::FileTypeExt as _;
+        kind.is_fifo()
+    };
+    #[cfg(not(unix))]
+    let fifo = false;
+    let what = if kind.is_dir() {
+        "a directory"
+    } else if fifo {
+        "a FIFO (named pipe)"
+    } else {
+        "not a regular file (a device or a socket)"
+    };
+    InputError::format(
+        path,
+        format!("{what}: data files must be regular files; refused without reading"),
+    )
+}
+
 /// An input directory opened once; every read is resolved beneath it.
 #[derive(Clone, Debug)]
 pub struct InputRoot {
@@ -120,7 +158,15 @@ impl InputRoot {
             return Err(outside("'..' is not allowed"));
         }
         let full = self.path.join(p);
-        let file = self.dir.open(p).map_err(|source| {
+        // A FIFO, device or directory in place of a data file is refused before any open
+        // (opening a FIFO for reading blocks until a writer comes); the open below re-checks
+        // the handle, so a swap after this check cannot block either.
+        if let Ok(meta) = self.dir.metadata(p) {
+            if !meta.is_file() {
+                return Err(not_regular(&full, &meta.file_type()));
+            }
+        }
+        let file = open_regular(&self.dir, p).map_err(|source| {
             if source.to_string().contains("outside of the filesystem") || self.leads_outside(p) {
                 outside("through a symlink")
             } else {
@@ -138,7 +184,7 @@ impl InputRoot {
         };
         let meta = file.metadata().map_err(|e| io("inspect", e))?;
         if !meta.is_file() {
-            return Err(InputError::format(&full, "not a regular file"));
+            return Err(not_regular(&full, &meta.file_type()));
         }
         let too_large = |size: u64| InputError::TooLarge {
             path: full.clone(),
@@ -199,6 +245,7 @@ pub struct Table {
 /// (either byte order, C or Fortran order); `path` names it in errors.
 pub fn parse_npy(path: &Path, bytes: &[u8]) -> Result<Table, InputError> {
     let bad = |m: String| InputError::format(path, m);
+    npy_header::check(bytes).map_err(|m| bad(format!("not an .npy file the reader takes: {m}")))?;
     let mut data = bytes;
     let header = npyz::NpyHeader::from_reader(&mut data)
         .map_err(|e| bad(format!("not an .npy file: {e}")))?;
@@ -271,6 +318,12 @@ pub struct Columns {
 /// every row as long as the header). Errors name the line, the column's header and the text.
 pub fn parse_csv(path: &Path, bytes: &[u8]) -> Result<Columns, InputError> {
     let bad = |m: String| InputError::format(path, m);
+    if let Some(line) = unclosed_quote_line(bytes) {
+        return Err(bad(format!(
+            "line {line}: the quote opened here is never closed (the rest of the file would \
+             be one cell)"
+        )));
+    }
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_reader(bytes);
@@ -319,9 +372,115 @@ pub fn parse_csv(path: &Path, bytes: &[u8]) -> Result<Columns, InputError> {
     Ok(Columns { headers, columns })
 }
 
-/// Parses a JSON document; errors give the line and column.
+/// The line (1-based) where a quoted CSV field opens that the file never closes, if any: the
+/// `csv` crate reads such a field to the end of the file, so a stray quote in the header would
+/// turn every row into one header cell. The states follow RFC 4180 as the `csv` crate reads
+/// it: a quote opens a field only at its start, and `""` inside a quoted field is a quote.
+fn unclosed_quote_line(bytes: &[u8]) -> Option<usize> {
+    #[derive(Clone, Copy, PartialEq)]
+    enum State {
+        FieldStart,
+        Unquoted,
+        Quoted,
+        QuoteInQuoted,
+    }
+    let (mut state, mut line, mut opened_at) = (State::FieldStart, 1, 1);
+    for &b in bytes {
+        let ends_field = matches!(b, b',' | b'\n' | b'\r');
+        state = match (state, b) {
+            (State::FieldStart, b'"') => {
+                opened_at = line;
+                State::Quoted
+            }
+            (State::Quoted, b'"') => State::QuoteInQuoted,
+            (State::Quoted, _) => State::Quoted,
+            (State::QuoteInQuoted, b'"') => State::Quoted,
+            (_, _) if ends_field => State::FieldStart,
+            _ => State::Unquoted,
+        };
+        if b == b'\n' {
+            line += 1;
+        }
+    }
+    (state == State::Quoted).then_some(opened_at)
+}
+
+/// Parses a JSON document; errors give the line and column. A key repeated in one object is
+/// refused, naming the key and its position (serde_json would keep the last value silently).
 pub fn parse_json(path: &Path, bytes: &[u8]) -> Result<serde_json::Value, InputError> {
-    serde_json::from_slice(bytes).map_err(|e| InputError::format(path, format!("JSON: {e}")))
+    serde_json::from_slice::<UniqueKeys>(bytes)
+        .map(|v| v.0)
+        .map_err(|e| InputError::format(path, format!("JSON: {e}")))
+}
+
+/// A JSON value read with every object's keys checked for repeats.
+struct UniqueKeys(serde_json::Value);
+
+impl<'de> serde::Deserialize<'de> for UniqueKeys {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(UniqueKeysVisitor).map(UniqueKeys)
+    }
+}
+
+/// Builds a [`serde_json::Value`] as serde_json's own visitor does, refusing repeated keys.
+struct UniqueKeysVisitor;
+
+impl<'de> serde::de::Visitor<'de> for UniqueKeysVisitor {
+    type Value = serde_json::Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+
+    fn visit_bool<E>(self, v: bool) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_i64<E>(self, v: i64) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_u64<E>(self, v: u64) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_f64<E>(self, v: f64) -> Result<Self::Value, E> {
+        Ok(serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, Into::into))
+    }
+
+    fn visit_str<E>(self, v: &str) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_string<E>(self, v: String) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+
+    fn visit_unit<E>(self) -> Result<Self::Value, E> {
+        Ok(serde_json::Value::Null)
+    }
+
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        let mut items = Vec::new();
+        while let Some(UniqueKeys(v)) = seq.next_element()? {
+            items.push(v);
+        }
+        Ok(items.into())
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+        let mut object = serde_json::Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if object.contains_key(&key) {
+                return Err(serde::de::Error::custom(format!(
+                    "key \"{key}\" appears twice in one object"
+                )));
+            }
+            let UniqueKeys(value) = map.next_value()?;
+            object.insert(key, value);
+        }
+        Ok(object.into())
+    }
 }
 
 #[cfg(test)]
@@ -449,6 +608,61 @@ mod tests {
             let _ = parse_csv(p(), &bytes);
             let _ = parse_json(p(), &bytes);
         }
+    }
+
+    #[test]
+    fn csv_unterminated_quote_is_an_error_not_a_header() {
+        let e = parse_csv(p(), b"t,\"a\n0,1\n1,2\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 1") && e.contains("never closed"), "{e}");
+        let e = parse_csv(p(), b"t,a\n0,1\n\"1,2\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 3") && e.contains("never closed"), "{e}");
+        // closed quotes, doubled quotes and a quote inside an unquoted field are fine
+        let c = parse_csv(p(), b"\"t \"\"s\"\"\",a\"b\n0,1\n").expect("parse");
+        assert_eq!(c.headers, vec!["t \"s\"", "a\"b"]);
+    }
+
+    #[test]
+    fn json_duplicate_keys_are_named_with_their_position() {
+        let e = parse_json(p(), b"{\"a\": 1,\n \"b\": {\"c\": 2, \"c\": 3}}")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("key \"c\" appears twice") && e.contains("line 2"),
+            "{e}"
+        );
+        let v = parse_json(
+            p(),
+            br#"{"a": [1, -2, 2.5, "x", null, true], "b": {"a": 1}}"#,
+        )
+        .expect("same key in two objects is fine");
+        assert_eq!(v["a"][2], 2.5);
+        assert_eq!(v["a"][1], -2);
+    }
+
+    /// The open behind [`InputRoot::read`] never blocks on a FIFO, so that a FIFO swapped in
+    /// after the check by name is refused by the check on the handle.
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_opens_without_blocking_and_the_handle_says_what_it_is() {
+        let dir = std::env::temp_dir().join(format!("trnews-input-fifo-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("dir");
+        let made = std::process::Command::new("mkfifo")
+            .arg(dir.join("pipe"))
+            .status()
+            .expect("mkfifo");
+        assert!(made.success());
+        let root =
+            cap_std::fs::Dir::open_ambient_dir(&dir, cap_std::ambient_authority()).expect("root");
+        let file = open_regular(&root, Path::new("pipe")).expect("opens at once");
+        let kind = file.metadata().expect("fstat").file_type();
+        let e = not_regular(Path::new("pipe"), &kind).to_string();
+        assert!(e.contains("pipe") && e.contains("FIFO"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

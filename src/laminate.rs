@@ -3,7 +3,7 @@
 //! Layers are listed from the bottom (y = 0) to the top surface. Each layer refers to a
 //! material by its index in [`Laminate::materials`].
 
-use crate::error::{require_positive, Error, Result};
+use crate::error::{require_positive, require_within, Error, Result};
 use crate::material::{Material, Orthotropic, Plane};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -94,7 +94,13 @@ pub fn epoxy_thickness(b: f64, composite: f64) -> f64 {
     3f64.sqrt() * b - composite
 }
 
+/// Non-positive draws of a and b redrawn per pair before the spec is refused: with a positive
+/// mean fewer than half the draws are non-positive, so valid specs never come near it.
 const MAX_REJECTIONS: u32 = 1000;
+
+/// The largest ellipse axis mean or standard deviation accepted (m): the report's ellipses are
+/// 0.75 x 0.13 mm; 10 cm is beyond any specimen's thickness.
+const MAX_AXIS_M: f64 = 0.1;
 
 impl StochasticSpec {
     fn validate(&self) -> Result<()> {
@@ -116,10 +122,33 @@ impl StochasticSpec {
                 return Err(Error::invalid(field, v, "must be finite and >= 0"));
             }
         }
-        Ok(())
+        for (field, v) in [
+            ("laminate.a_mean_m", self.a_mean_m),
+            ("laminate.a_std_m", self.a_std_m),
+            ("laminate.b_mean_m", self.b_mean_m),
+            ("laminate.b_std_m", self.b_std_m),
+        ] {
+            require_within(
+                field,
+                v,
+                0.0,
+                MAX_AXIS_M,
+                "m",
+                "an ellipse axis of a fibre bundle",
+            )?;
+        }
+        // The draws and the layers are held at once, then the mesh (estimated in its turn).
+        let per_pair = std::mem::size_of::<PairDraw>() + 2 * std::mem::size_of::<Layer>();
+        crate::budget::check_memory(
+            "laminate.pairs",
+            self.pairs,
+            self.pairs as f64 * per_pair as f64,
+            "draw fewer pairs",
+        )
     }
 
-    /// Draws a positive value from N(mean, std), counting rejected non-positive draws.
+    /// Draws a positive value from N(mean, std), counting rejected non-positive draws; more
+    /// than [`MAX_REJECTIONS`] for one pair is an error naming the standard deviation `field`.
     fn draw_positive(
         dist: &Normal<f64>,
         rng: &mut ChaCha8Rng,
@@ -135,8 +164,12 @@ impl StochasticSpec {
             if *rejected > MAX_REJECTIONS {
                 return Err(Error::invalid(
                     field,
-                    v,
-                    "distribution yields almost only non-positive values",
+                    dist.std_dev(),
+                    format!(
+                        "more than {MAX_REJECTIONS} non-positive draws for one pair with mean {}: \
+                         keep the standard deviation well below the mean",
+                        dist.mean()
+                    ),
                 ));
             }
         }
@@ -150,8 +183,8 @@ impl StochasticSpec {
         rng: &mut ChaCha8Rng,
     ) -> Result<PairDraw> {
         let mut rejected_draws = 0;
-        let a_m = Self::draw_positive(a_dist, rng, "laminate.a_mean_m", &mut rejected_draws)?;
-        let b_m = Self::draw_positive(b_dist, rng, "laminate.b_mean_m", &mut rejected_draws)?;
+        let a_m = Self::draw_positive(a_dist, rng, "laminate.a_std_m", &mut rejected_draws)?;
+        let b_m = Self::draw_positive(b_dist, rng, "laminate.b_std_m", &mut rejected_draws)?;
         let x_m = rng.random_range(0.0..a_m);
         let composite_m = composite_thickness(a_m, b_m, x_m);
         let epoxy_drawn_m = epoxy_thickness(b_m, composite_m);

@@ -67,6 +67,11 @@ pub struct Material {
     pub stiffness_pa: [[f64; 3]; 3],
 }
 
+/// The largest elastic modulus accepted (Pa; see [`Orthotropic::check_constants`]).
+pub const MAX_MODULUS_PA: f64 = 1e13;
+/// The densities accepted (kg/m^3; see [`Orthotropic::check_constants`]).
+pub const DENSITY_KG_M3: (f64, f64) = (1.0, 1e5);
+
 impl Orthotropic {
     /// An isotropic material as an orthotropic one (E, nu in all directions).
     pub fn isotropic(name: &str, e_pa: f64, nu: f64, density_kg_m3: f64) -> Self {
@@ -137,18 +142,29 @@ impl Orthotropic {
         }
     }
 
+    /// Moduli in (0, 1e13] Pa: the stiffest solid, diamond, has E of about 1.2e12 Pa, so ten
+    /// times that bounds every material with room; densities in [1, 1e5] kg/m^3: from below
+    /// the lightest foams (~10) to above osmium (22,600).
     fn check_constants(&self) -> Result<()> {
-        let positive = [
+        let moduli = [
             ("e1_pa", self.e1_pa),
             ("e2_pa", self.e2_pa),
             ("e3_pa", self.e3_pa),
             ("g12_pa", self.g12_pa),
-            ("density_kg_m3", self.density_kg_m3),
         ];
-        for (field, value) in positive {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(self.reject(format!("{field} = {value} must be finite and > 0")));
+        for (field, value) in moduli {
+            if !(value.is_finite() && value > 0.0 && value <= MAX_MODULUS_PA) {
+                return Err(self.reject(format!(
+                    "{field} = {value} must be within (0, {MAX_MODULUS_PA:e}] Pa (10x diamond's modulus)"
+                )));
             }
+        }
+        let density = self.density_kg_m3;
+        if !(density.is_finite() && (DENSITY_KG_M3.0..=DENSITY_KG_M3.1).contains(&density)) {
+            return Err(self.reject(format!(
+                "density_kg_m3 = {density} must be within [{:e}, {:e}] kg/m^3 (foams to beyond osmium)",
+                DENSITY_KG_M3.0, DENSITY_KG_M3.1
+            )));
         }
         for (field, value) in [
             ("nu12", self.nu12),

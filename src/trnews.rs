@@ -127,15 +127,18 @@ fn common_step(traces: &[Signal], what: &str) -> Result<f64> {
     Ok(first.dt_s)
 }
 
-/// Refuses a drive peak that is not finite and positive.
+/// Refuses a drive peak that is not finite and positive, or above
+/// [`crate::scene::MAX_TRACTION_PA`] (a traction in Pa for simulated channels; no drive
+/// amplifier of a lab reaches such a number in volts either).
 fn positive_peak(peak_drive: f64) -> Result<()> {
-    if peak_drive.is_finite() && peak_drive > 0.0 {
+    let max = crate::scene::MAX_TRACTION_PA;
+    if peak_drive.is_finite() && peak_drive > 0.0 && peak_drive <= max {
         Ok(())
     } else {
         Err(Error::invalid(
             "peak_drive",
             peak_drive,
-            "must be finite and > 0",
+            format!("must be within (0, {max:e}]"),
         ))
     }
 }

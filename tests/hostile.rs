@@ -15,14 +15,18 @@ mod common;
 use common::TempDir;
 
 fn host(out: &Path, time_limit_s: f64) -> Host {
-    Host::new(HostOptions {
+    Host::new(host_options(out, time_limit_s)).expect("host")
+}
+
+/// The options of [`host`].
+fn host_options(out: &Path, time_limit_s: f64) -> HostOptions {
+    HostOptions {
         out_dir: out.to_path_buf(),
         quiet: true,
         max_operations: 20_000_000,
         time_limit: Some(Duration::from_secs_f64(time_limit_s)),
         ..HostOptions::default()
-    })
-    .expect("host")
+    }
 }
 
 /// Runs `script`; returns the error text, or None when it ran.
@@ -217,6 +221,386 @@ fn gmsh_files_are_read_inside_the_script_directory_symlinks_included() {
     assert_eq!(run_file("inside.rhai", &script("plate.msh")), None);
     let err = run_file("link.rhai", &script("link.msh")).expect("the symlink is refused");
     assert!(err.contains("link.msh") && err.contains("outside"), "{err}");
+}
+
+/// A host reading data files beneath `data` (`--data`), with the memory limit `max_memory`.
+fn data_host(out: &Path, data: &Path, max_memory: u64) -> Host {
+    Host::new(HostOptions {
+        out_dir: out.to_path_buf(),
+        data_dir: Some(data.to_path_buf()),
+        quiet: true,
+        max_operations: 20_000_000,
+        max_memory,
+        time_limit: Some(Duration::from_secs(20)),
+        ..HostOptions::default()
+    })
+    .expect("host")
+}
+
+/// Runs `script` on a thread and returns its error text, failing the test when the script
+/// runs without error or takes more than `seconds` (a blocking open would hang the thread).
+fn error_within(host: Host, script: &str, seconds: u64) -> String {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let text = script.to_string();
+    std::thread::spawn(move || {
+        let _ = tx.send(host.run_str("t.rhai", &text).err().map(|e| e.to_string()));
+    });
+    rx.recv_timeout(Duration::from_secs(seconds))
+        .unwrap_or_else(|_| panic!("no answer within {seconds} s: {script}"))
+        .unwrap_or_else(|| panic!("ran without error: {script}"))
+}
+
+/// Issue 26: a FIFO in place of a data file (a Gmsh mesh too), directly or through a symlink,
+/// is refused before it is opened (opening a FIFO for reading waits for a writer), within
+/// seconds, naming the file.
+#[cfg(unix)]
+#[test]
+fn a_fifo_in_place_of_a_data_file_is_refused_without_blocking() {
+    let dir = TempDir::new("hostile-fifo");
+    let made = std::process::Command::new("mkfifo")
+        .arg(dir.0.join("pipe.npy"))
+        .status()
+        .expect("mkfifo");
+    assert!(made.success());
+    std::os::unix::fs::symlink("pipe.npy", dir.0.join("link.csv")).expect("link");
+    let out = TempDir::new("hostile-fifo-out");
+    let cases = [
+        (r#"io::read_npy("pipe.npy");"#, "pipe.npy"),
+        (r#"io::read_csv("link.csv");"#, "link.csv"),
+        (r#"io::read_json("pipe.npy");"#, "pipe.npy"),
+        (
+            r#"scene::build(#{gmsh: #{path: "pipe.npy", materials: #{"1": "epoxy"}}, crack: ()});"#,
+            "pipe.npy",
+        ),
+    ];
+    for (script, file) in cases {
+        let t = Instant::now();
+        let err = error_within(data_host(&out.0, &dir.0, 1 << 30), script, 10);
+        assert!(
+            err.starts_with("t.rhai:1:") && err.contains(file) && err.contains("FIFO"),
+            "{script}\n  -> {err}"
+        );
+        assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
+    }
+}
+
+/// Writes the data files crafted against the parsers into `dir`: `nested.npy` (a structured
+/// dtype nested 40 deep), `extra.npy` and `twice.npy` (an unknown and a repeated header key),
+/// `max.msh` and `billion.msh` (Gmsh counts of 2^64 - 1 and 10^9), `quote.csv` (a quote never
+/// closed) and `dup.json` (a key twice in one object).
+fn write_hostile_files(dir: &Path) {
+    let npy = |name: &str, header: &str| {
+        let mut b = b"\x93NUMPY\x01\x00".to_vec();
+        b.extend_from_slice(&(header.len() as u16).to_le_bytes());
+        b.extend_from_slice(header.as_bytes());
+        b.extend_from_slice(&[0; 8]);
+        std::fs::write(dir.join(name), b).expect("npy");
+    };
+    let nested = (0..40).fold("'<f8'".to_string(), |inner, k| {
+        format!("[('f{k}', {inner})]")
+    });
+    npy(
+        "nested.npy",
+        &format!("{{'descr': {nested}, 'fortran_order': False, 'shape': (1,), }}\n"),
+    );
+    npy(
+        "extra.npy",
+        "{'descr': '<f8', 'fortran_order': False, 'shape': (1,), 'bogus': 1}\n",
+    );
+    npy(
+        "twice.npy",
+        "{'descr': '<f8', 'shape': (1,), 'fortran_order': False, 'shape': (1,)}\n",
+    );
+    let plate = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts/gmsh_plate.msh"),
+    )
+    .expect("plate");
+    for (name, from, to) in [
+        ("max.msh", "\n0 9 0 1\n", "\n0 9 0 18446744073709551615\n"),
+        (
+            "billion.msh",
+            "$Elements\n3 505 1 505\n",
+            "$Elements\n1000000000 505 1 505\n",
+        ),
+    ] {
+        assert!(plate.contains(from), "{from}");
+        std::fs::write(dir.join(name), plate.replacen(from, to, 1)).expect("msh");
+    }
+    std::fs::write(dir.join("quote.csv"), "t_s,\"u\n0,1\n1,2\n").expect("csv");
+    std::fs::write(dir.join("dup.json"), "{\"gain\": 1,\n \"gain\": 2}").expect("json");
+}
+
+/// Issue 26: data files crafted against the parsers are errors naming the file and what was
+/// found, in linear time: an `.npy` header with a deeply nested structured dtype (exponential
+/// in npyz's header parser), unknown and repeated header keys, Gmsh counts that cannot fit in
+/// the file (mshio preallocates from them: 2^64 - 1 panicked, 10^9 aborted), a CSV quote never
+/// closed (read as one header cell), and a JSON key repeated in one object (the last value was
+/// kept silently).
+#[test]
+fn hostile_data_files_are_errors_naming_the_file() {
+    let dir = TempDir::new("hostile-data-files");
+    write_hostile_files(&dir.0);
+    let gmsh = |path: &str| {
+        format!("scene::build(#{{gmsh: #{{path: \"{path}\", materials: #{{\"1\": \"epoxy\", \"2\": \"epoxy\"}}}}, crack: ()}});")
+    };
+    let cases = [
+        (
+            "io::read_npy(\"nested.npy\");".to_string(),
+            vec!["nested.npy", "structured dtype"],
+        ),
+        (
+            "io::read_npy(\"extra.npy\");".into(),
+            vec!["extra.npy", "unknown header key 'bogus'"],
+        ),
+        (
+            "io::read_npy(\"twice.npy\");".into(),
+            vec!["twice.npy", "'shape' appears twice"],
+        ),
+        (
+            gmsh("max.msh"),
+            vec![
+                "max.msh",
+                "$Nodes",
+                "numNodesInBlock = 18446744073709551615",
+            ],
+        ),
+        (
+            gmsh("billion.msh"),
+            vec!["billion.msh", "$Elements", "numEntityBlocks = 1000000000"],
+        ),
+        (
+            "io::read_csv(\"quote.csv\");".into(),
+            vec!["quote.csv", "line 1", "never closed"],
+        ),
+        (
+            "io::read_json(\"dup.json\");".into(),
+            vec!["dup.json", "key \"gain\" appears twice", "line 2"],
+        ),
+    ];
+    let out = TempDir::new("hostile-data-files-out");
+    for (script, needles) in &cases {
+        let t = Instant::now();
+        let err = error_within(data_host(&out.0, &dir.0, 1 << 30), script, 20);
+        assert!(err.starts_with("t.rhai:1:"), "no position: {err}");
+        for needle in needles {
+            assert!(
+                err.contains(needle),
+                "{script}\n  -> {err}\n  (expected {needle:?})"
+            );
+        }
+        assert!(!err.contains("internal error"), "{err}");
+        assert!(
+            t.elapsed() < Duration::from_secs(5),
+            "{script}: {:?}",
+            t.elapsed()
+        );
+    }
+}
+
+/// Issue 26: sizes that come from input are estimated against the memory limit before
+/// anything is allocated, the error naming the field and the value: a laminate of 10^9 pairs
+/// (directly and in a scene), a signal's samples and times copied into script arrays (a
+/// `Dynamic` a number), the FFT buffers of an envelope and of a cross-correlation, and the
+/// rows of a `.npy` file expanding ~23x into script arrays (the expansion is charged, not the
+/// file: `--max-memory` was overshot 5.7x).
+#[test]
+fn sizes_from_input_are_estimated_before_allocating() {
+    let dir = TempDir::new("hostile-sizes");
+    // 4 Mi rows of one int32: a 16 MiB file, within the read limit (a quarter of 256 MiB), that
+    // becomes 4 Mi one-number arrays of ~88 bytes each
+    let rows = 1 << 22;
+    let header = format!("{{'descr': '<i4', 'fortran_order': False, 'shape': ({rows}, 1), }}");
+    let header = format!("{header:<118}\n");
+    let mut npy = b"\x93NUMPY\x01\x00".to_vec();
+    npy.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    npy.extend_from_slice(header.as_bytes());
+    npy.resize(npy.len() + 4 * rows, 0);
+    std::fs::write(dir.0.join("rows.npy"), npy).expect("npy");
+    let big = "signal::zeros(1e-8, 0.0, 20000000)";
+    let half = "signal::zeros(1e-8, 0.0, 8388608)";
+    let cases = [
+        (
+            "laminate::stochastic(#{pairs: 1000000000});".to_string(),
+            "laminate.pairs = 1000000000 would need about",
+        ),
+        (
+            "scene::preset(\"smoke\", #{laminate: #{pairs: 1000000000}});".into(),
+            "laminate.pairs = 1000000000 would need about",
+        ),
+        (
+            format!("{big}.samples();"),
+            "samples = 20000000 samples would need about",
+        ),
+        (
+            format!("{big}.times();"),
+            "times = 20000000 samples would need about",
+        ),
+        (
+            format!("{big}.envelope();"),
+            "analytic signal = 20000000 samples would need about",
+        ),
+        (
+            format!("{half}.xcorr({half}, 0.0, 1e-6);"),
+            "cross-correlation = 16777216 samples would need about",
+        ),
+        (
+            "io::read_npy(\"rows.npy\");".into(),
+            "rows.npy = 4194304 values in 4194304 rows would need about",
+        ),
+    ];
+    let out = TempDir::new("hostile-sizes-out");
+    for (script, needle) in &cases {
+        let t = Instant::now();
+        let err = error_within(data_host(&out.0, &dir.0, 256 << 20), script, 30);
+        assert!(err.starts_with("t.rhai:1:"), "no position: {err}");
+        assert!(
+            err.contains(needle) && err.contains("256.000 MiB"),
+            "{script}\n  -> {err}\n  (expected {needle:?})"
+        );
+        assert!(
+            t.elapsed() < Duration::from_secs(10),
+            "{script}: {:?}",
+            t.elapsed()
+        );
+    }
+    // read as Signals, each of the 4 Mi rows is still a script value: refused too
+    let err = error_within(
+        data_host(&out.0, &dir.0, 256 << 20),
+        "io::read_npy(\"rows.npy\", #{dt_s: 1e-8});",
+        30,
+    );
+    assert!(err.contains("rows.npy = 4194304 values"), "{err}");
+}
+
+/// Issue 26: finite values outside any experiment's physical range are errors naming the
+/// field, the value written and the range: a negative or specimen-wide aperture, angles of
+/// 1e300 degrees, a friction coefficient of 9e18, tractions and moduli of 1e30 Pa, a density
+/// of 1e6 kg/m^3, ellipse axes of metres.
+#[test]
+fn physical_ranges_are_errors_naming_the_field_and_value() {
+    let dir = TempDir::new("hostile-ranges");
+    let material = |field: &str, value: &str| {
+        let constants = [
+            ("e1_pa", "3.7e9"),
+            ("e2_pa", "3.7e9"),
+            ("e3_pa", "3.7e9"),
+            ("g12_pa", "1.3e9"),
+            ("nu12", "0.4"),
+            ("nu13", "0.4"),
+            ("nu23", "0.4"),
+            ("density_kg_m3", "1200.0"),
+        ]
+        .map(|(f, v)| format!("{f}: {}", if f == field { value } else { v }))
+        .join(", ");
+        format!("#{{laminate: #{{kind: \"homogeneous\", thickness_m: 4e-3, material: #{{name: \"m\", {constants}}}}}}}")
+    };
+    let cases: Vec<(String, String)> = vec![
+        (
+            "#{receivers: #{aperture_m: -1e-3}}".into(),
+            "receivers.aperture_m = -0.001: must be within [0e0, ".into(),
+        ),
+        (
+            "#{receivers: #{aperture_m: 1.0}}".into(),
+            "receivers.aperture_m = 1: must be within".into(),
+        ),
+        (
+            "#{transmitter: #{angle_deg: 1e300}}".into(),
+            format!(
+                "transmitter.angle_deg = {}: must be within [-3.6e2, 3.6e2] degrees",
+                1e300
+            ),
+        ),
+        (
+            "#{sources: [#{kind: \"traction\", edge: \"top\", angle_deg: -1e300}]}".into(),
+            format!("sources[0].angle_deg = {}: must be within", -1e300),
+        ),
+        (
+            "#{crack: #{contact: #{friction: 9e18}}}".into(),
+            "contact.friction = 9000000000000000000: must be within [0e0, 1e1]".into(),
+        ),
+        (
+            "#{transmitter: #{peak_pa: 1e30}}".into(),
+            "transmitter.peak_pa = 1000000000000000000000000000000: must be within (0, 1e10] Pa"
+                .into(),
+        ),
+        (
+            material("e1_pa", "1e30"),
+            "e1_pa = 1000000000000000000000000000000 must be within (0, 1e13] Pa".into(),
+        ),
+        (
+            material("density_kg_m3", "1e6"),
+            "density_kg_m3 = 1000000 must be within [1e0, 1e5] kg/m^3".into(),
+        ),
+        (
+            "#{laminate: #{b_std_m: 1.0}}".into(),
+            "laminate.b_std_m = 1: must be within [0e0, 1e-1] m".into(),
+        ),
+    ];
+    for (overrides, needle) in &cases {
+        let script = format!("scene::preset(\"smoke\", {overrides});");
+        let err = run(&dir.0, &script).unwrap_or_else(|| panic!("ran without error: {script}"));
+        assert!(err.starts_with("t.rhai:1:"), "no position: {err}");
+        assert!(
+            err.contains(needle.as_str()),
+            "{script}\n  -> {err}\n  (expected {needle:?})"
+        );
+    }
+}
+
+/// Issue 26: fields that cannot apply are refused rather than ignored: the layered
+/// rectangle's fields next to `gmsh` (whose mesh, materials and size are the file's), a
+/// snapshot directory without snapshots (nothing is created), and contact options for a run
+/// of a scene without a crack.
+#[test]
+fn fields_that_cannot_apply_are_refused() {
+    let dir = TempDir::new("hostile-unused");
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts/gmsh_plate.msh");
+    std::fs::copy(&mesh, dir.0.join("plate.msh")).expect("mesh");
+    let gmsh = |extra: &str| {
+        format!("scene::build(#{{gmsh: #{{path: \"plate.msh\", materials: #{{\"1\": \"epoxy\", \"2\": \"epoxy\"}}}}, crack: (), receivers: #{{x_m: [1e-3]}}, sources: [#{{kind: \"normal\", edge: \"top\"}}]{extra}}});")
+    };
+    let run_of = |options: &str| {
+        format!("scene::preset(\"smoke\", #{{crack: ()}}).transmit(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), #{{duration_s: 2e-7, {options}}});")
+    };
+    let cases = [
+        (
+            gmsh(", width_m: 0.02"),
+            "scene.width_m = 0.02 is not used with `gmsh`",
+        ),
+        (
+            gmsh(", element_size_x_m: 1e-4"),
+            "scene.element_size_x_m = 0.0001 is not used with `gmsh`",
+        ),
+        (
+            gmsh(", laminate: #{pairs: 3}"),
+            "scene.laminate = #{\"pairs\": 3} is not used with `gmsh`",
+        ),
+        (run_of("snapshot_dir: \"snaps\""), "snapshot_dir = "),
+        (
+            run_of("contact: #{friction: 0.5}"),
+            "run.contact = #{\"friction\": 0.5} cannot apply",
+        ),
+    ];
+    let out = TempDir::new("hostile-unused-out");
+    assert_eq!(
+        data_host(&out.0, &dir.0, 1 << 30)
+            .run_str("t.rhai", &gmsh(""))
+            .err()
+            .map(|e| e.to_string()),
+        None
+    );
+    for (script, needle) in &cases {
+        let err = error_within(data_host(&out.0, &dir.0, 1 << 30), script, 30);
+        assert!(err.starts_with("t.rhai:1:"), "no position: {err}");
+        assert!(
+            err.contains(needle),
+            "{script}\n  -> {err}\n  (expected {needle:?})"
+        );
+    }
+    assert!(
+        !out.0.join("snaps").exists(),
+        "the refused run created its snapshot directory"
+    );
 }
 
 /// The operation limit 0 is refused; the time limit stops a script loop and a simulation.
@@ -747,6 +1131,9 @@ const SCENE_FIELDS: &[&str] = &[
     "edges.left",
     "receivers.at",
     "gmsh",
+    "receivers.aperture_m",
+    "transmitter.angle_deg",
+    "laminate.b_std_m",
 ];
 const RUN_FIELDS: &[&str] = &[
     "duration_s",
@@ -791,6 +1178,10 @@ fn case(g: &mut Gen) -> (String, String) {
                 "signal::chirp(#{dt_s: 1e-8, t1_s: 5e-6, total_s: 5e-6, amplitude: V})",
                 "signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8).envelope().scale(V)",
                 "signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8).periodogram().peaks(V, 1.0)",
+                "signal::zeros(1e-8, 0.0, V).samples()",
+                "signal::zeros(1e-8, 0.0, V).envelope()",
+                "signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8).xcorr(signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8), -V, V)",
+                "laminate::stochastic(#{pairs: V})",
             ]);
             (format!("{};", call.replace('V', &v)), String::new())
         }
@@ -809,6 +1200,10 @@ fn case(g: &mut Gen) -> (String, String) {
                 "io::write_json(\"a.json\", #{a: V})",
                 "io::write_csv(\"a.csv\", [\"x\"], [[V]])",
                 "io::write_csv(V, [\"x\"], [[1.0]])",
+                "io::read_npy(\"nested.npy\") + V",
+                "io::read_csv(\"quote.csv\") + V",
+                "io::read_json(\"dup.json\") + V",
+                "scene::build(#{gmsh: #{path: \"max.msh\", materials: #{\"1\": \"epoxy\"}}, crack: (), width_m: V})",
             ]);
             (format!("{};", call.replace('V', &v)), String::new())
         }
@@ -848,7 +1243,13 @@ fn fuzz_scene_run_signal_plot_and_io_calls() {
         .unwrap_or(300);
     let budget_s = 10.0;
     let dir = TempDir::new("hostile-fuzz");
-    let h = host(&dir.0, budget_s);
+    let data = TempDir::new("hostile-fuzz-data");
+    write_hostile_files(&data.0);
+    let h = Host::new(HostOptions {
+        data_dir: Some(data.0.clone()),
+        ..host_options(&dir.0, budget_s)
+    })
+    .expect("host");
     let mut g = Gen(seed);
     let start = Instant::now();
     let (mut ok, mut errors) = (0, 0);

@@ -1,17 +1,25 @@
 //! Import of 2D triangle meshes from Gmsh MSH 4.1 files (via the `mshio` crate), so scenes
 //! are not limited to rectangles.
 
+mod counts;
+
 use super::Mesh;
 use crate::error::{Error, Result};
 use std::collections::HashMap;
+
+/// The MSH file parsed by `mshio`, once its counts are known to fit in its bytes
+/// ([`counts::check`]: `mshio` preallocates from them).
+fn parse(bytes: &[u8]) -> Result<mshio::MshFile<u64, i32, f64>> {
+    counts::check(bytes).map_err(|e| Error::Mesh(format!("cannot read the MSH file: {e}")))?;
+    mshio::parse_msh_bytes(bytes).map_err(|e| Error::Mesh(format!("cannot read the MSH file: {e}")))
+}
 
 /// Reads the linear triangles (`Tri3`) of a Gmsh MSH 4.1 file (ASCII or binary). Each
 /// triangle takes the material that `physical_material` maps its surface's physical group
 /// to; triangles are made counter-clockwise; other element types are ignored. The z
 /// coordinate is dropped.
 pub fn read_msh(bytes: &[u8], physical_material: &HashMap<i32, usize>) -> Result<Mesh> {
-    let msh = mshio::parse_msh_bytes(bytes)
-        .map_err(|e| Error::Mesh(format!("cannot read the MSH file: {e}")))?;
+    let msh = parse(bytes)?;
     let nodes_section = msh
         .data
         .nodes
@@ -99,8 +107,7 @@ pub fn read_msh(bytes: &[u8], physical_material: &HashMap<i32, usize>) -> Result
 /// of a Gmsh MSH 4.1 file (each node once, in file order): a crack or an interface drawn
 /// as a physical line. An error when the group has no line element.
 pub fn read_physical_line(bytes: &[u8], group: i32) -> Result<Vec<[f64; 2]>> {
-    let msh = mshio::parse_msh_bytes(bytes)
-        .map_err(|e| Error::Mesh(format!("cannot read the MSH file: {e}")))?;
+    let msh = parse(bytes)?;
     let curves: Vec<i32> = msh
         .data
         .entities
@@ -160,7 +167,7 @@ mod tests {
 
     /// The unit square as two triangles on two surfaces (physical groups 7 and 8), the
     /// second written clockwise, plus a line element that must be ignored.
-    const SQUARE: &str = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n0 0 2 0\n1 0 0 0 1 1 0 1 7 0\n2 0 0 0 1 1 0 1 8 0\n$EndEntities\n$Nodes\n1 4 1 4\n2 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n$EndNodes\n$Elements\n3 3 1 3\n2 1 2 1\n1 1 2 3\n2 2 2 1\n2 1 4 3\n1 1 1 1\n3 1 2\n$EndElements\n";
+    pub(super) const SQUARE: &str = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n0 0 2 0\n1 0 0 0 1 1 0 1 7 0\n2 0 0 0 1 1 0 1 8 0\n$EndEntities\n$Nodes\n1 4 1 4\n2 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n$EndNodes\n$Elements\n3 3 1 3\n2 1 2 1\n1 1 2 3\n2 2 2 1\n2 1 4 3\n1 1 1 1\n3 1 2\n$EndElements\n";
 
     #[test]
     fn reads_triangles_with_materials_counter_clockwise() {

@@ -5,7 +5,7 @@
 
 use crate::accuracy::Refinement;
 use crate::contact::ContactOptions;
-use crate::error::{require_positive, Error, Result};
+use crate::error::{require_positive, require_within, Error, Result};
 use crate::fem::{AbsorbingEdge, Model};
 use crate::laminate::{Laminate, Layer, StochasticSpec};
 use crate::material::{Orthotropic, Plane};
@@ -801,6 +801,46 @@ fn build_laminate(spec: &LaminateSpec, plane: Plane) -> Result<Laminate> {
     }
 }
 
+/// The largest traction a transmitter or drive may reach (Pa): 10 GPa, above the strength of
+/// any laminate (CFRP fails below 3 GPa); the report drives 50 kPa.
+pub const MAX_TRACTION_PA: f64 = 1e10;
+
+/// Physical ranges of the scene's numbers that the build does not meet elsewhere: the
+/// transmitter's peak traction in (0, [`MAX_TRACTION_PA`]] and every direction within one
+/// turn either way, [-360, 360] degrees (an angle of 1e300 degrees has no direction: its sine
+/// is round-off).
+fn check_ranges(spec: &SceneSpec) -> Result<()> {
+    let peak = spec.transmitter.peak_pa;
+    if !(peak.is_finite() && peak > 0.0 && peak <= MAX_TRACTION_PA) {
+        return Err(Error::invalid(
+            "transmitter.peak_pa",
+            peak,
+            format!(
+                "must be within (0, {MAX_TRACTION_PA:e}] Pa (the focusing signals are scaled to \
+                 it; 10 GPa is above the strength of any laminate)"
+            ),
+        ));
+    }
+    let turn = |field: &str, angle: f64| {
+        require_within(
+            field,
+            angle,
+            -360.0,
+            360.0,
+            "degrees",
+            "one turn either way",
+        )
+    };
+    turn("transmitter.angle_deg", spec.transmitter.angle_deg)?;
+    for (i, source) in spec.sources.iter().enumerate() {
+        if let SourceSpec::Traction { angle_deg, .. } | SourceSpec::Point { angle_deg, .. } = source
+        {
+            turn(&format!("sources[{i}].angle_deg"), *angle_deg)?;
+        }
+    }
+    Ok(())
+}
+
 /// The rectangle a scene occupies: lower left corner and size (m). Sources, receivers and
 /// the viscous-spring distances are placed in it.
 #[derive(Clone, Copy, Debug)]
@@ -960,13 +1000,7 @@ impl Scene {
     /// omega_max(tied) <= omega_max(split), and contact by exact multipliers only constrains
     /// the split model further (report Sec. 4.8.2, 4.9).
     pub fn build(spec: &SceneSpec) -> Result<Scene> {
-        if !(spec.transmitter.peak_pa.is_finite() && spec.transmitter.peak_pa > 0.0) {
-            return Err(Error::invalid(
-                "transmitter.peak_pa",
-                spec.transmitter.peak_pa,
-                "must be finite and > 0 (the focusing signals are scaled to it)",
-            ));
-        }
+        check_ranges(spec)?;
         if let Some(contact) = spec.contact() {
             contact.validate()?;
         }
@@ -1857,6 +1891,17 @@ fn build_receivers(on: &dyn Attach, r: &ReceiverSpec, height: f64) -> Result<Vec
             "needs at least one receiver position (in x_m or at)",
         ));
     }
+    // The transducer face spans at most the specimen: a wider one is no longer a receiver at
+    // a position (and a negative one has no face).
+    let (x0, x1, _, _) = mesh.bounds();
+    require_within(
+        "receivers.aperture_m",
+        r.aperture_m,
+        0.0,
+        x1 - x0,
+        "m",
+        "0 records at a point; at most the specimen's width",
+    )?;
     let half = 0.5 * r.aperture_m;
     let recorded = (r.component, r.quantity);
     let face = |name: &str, side: Side, p: [f64; 2], along: [f64; 2]| {

@@ -33,6 +33,34 @@ impl<T, E: std::fmt::Display> WithPosition<T> for Result<T, E> {
     }
 }
 
+/// Bytes a script array of `values` numbers in `rows` rows takes: one `Dynamic` per number,
+/// and per row the row's `Dynamic`, its array header and the allocator's bookkeeping (taken
+/// as 32 bytes). A `.npy` of 4-byte values read as rows of one number takes about 23 times
+/// its file: the expansion, not the file, is what must fit in the memory limit.
+pub fn script_array_bytes(rows: usize, values: usize) -> f64 {
+    let value = std::mem::size_of::<Dynamic>() as f64;
+    let row = value + std::mem::size_of::<Array>() as f64 + 32.0;
+    values as f64 * value + rows as f64 * row
+}
+
+/// Refuses to build a script array of `values` numbers in `rows` rows above the memory limit
+/// ([`crate::budget::check_memory`]), naming `field` with `value`.
+pub fn check_script_array(
+    ctx: &NativeCallContext,
+    field: &str,
+    value: impl std::fmt::Display,
+    rows: usize,
+    values: usize,
+) -> ScriptResult<()> {
+    crate::budget::check_memory(
+        field,
+        value,
+        script_array_bytes(rows, values),
+        "keep the data in a Signal or read fewer values",
+    )
+    .at(ctx)
+}
+
 /// A number from an integer or float.
 pub fn number(value: &Dynamic) -> Option<f64> {
     value

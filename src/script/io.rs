@@ -180,6 +180,33 @@ fn to_signal(
         .at(ctx)
 }
 
+/// Refuses to turn the `values` numbers of data file `path`, in `rows` rows, into script
+/// values above the memory limit: arrays of numbers (a `Dynamic` a number, see
+/// [`crate::script::convert::script_array_bytes`]), or Signals when `signals` (8 bytes a
+/// sample and one `Dynamic` a row). The estimate is charged, not the file's size: a file of
+/// 4-byte numbers becomes arrays about 23 times its size.
+fn check_values(
+    ctx: &NativeCallContext,
+    path: &str,
+    rows: usize,
+    values: usize,
+    signals: bool,
+) -> ScriptResult<()> {
+    use crate::script::convert::{script_array_bytes, WithPosition};
+    let bytes = if signals {
+        8.0 * values as f64 + script_array_bytes(rows, 0)
+    } else {
+        script_array_bytes(rows, values)
+    };
+    crate::budget::check_memory(
+        path,
+        format!("{values} values in {rows} rows"),
+        bytes,
+        "read a smaller file, or read it as Signals (dt_s)",
+    )
+    .at(ctx)
+}
+
 /// Numbers as a Rhai array.
 fn number_array(values: &[f64]) -> Dynamic {
     Dynamic::from_array(values.iter().map(|&v| Dynamic::from_float(v)).collect())
@@ -222,8 +249,8 @@ fn uniform_times(ctx: &NativeCallContext, name: &str, t: &[f64]) -> ScriptResult
 
 #[export_module]
 mod io_api {
+    use super::{check_values, number_array, read_data, to_signal, uniform_times, ReadOptions};
     use super::{npy_data, plain};
-    use super::{number_array, read_data, to_signal, uniform_times, ReadOptions};
     use crate::input;
     use crate::io;
     use crate::script::convert::options;
@@ -260,6 +287,13 @@ mod io_api {
         }
         let (full, bytes) = read_data(&ctx, path, super::Format::Npy)?;
         let table = input::parse_npy(&full, &bytes).at(&ctx)?;
+        drop(bytes);
+        let rows = if table.shape.len() == 2 {
+            table.shape[0]
+        } else {
+            1
+        };
+        check_values(&ctx, path, rows, table.values.len(), opts.dt_s.is_some())?;
         let one = |i: usize, row: &[f64]| match opts.dt_s {
             Some(dt) => to_signal(&ctx, &opts, dt, row.to_vec(), &format!("{path} row {i}")),
             None => Ok(number_array(row)),
@@ -297,6 +331,10 @@ mod io_api {
         }
         let (full, bytes) = read_data(&ctx, path, super::Format::Csv)?;
         let table = input::parse_csv(&full, &bytes).at(&ctx)?;
+        drop(bytes);
+        let values = table.columns.iter().map(Vec::len).sum();
+        let signals = opts.dt_s.is_some() || opts.time_column.is_some();
+        check_values(&ctx, path, table.columns.len(), values, signals)?;
         let mut skip = None;
         if let Some(name) = &opts.time_column {
             let i = table.headers.iter().position(|h| h == name).ok_or_else(|| {

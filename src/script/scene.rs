@@ -28,6 +28,7 @@ pub fn module() -> Module {
 /// Builds a scene from an override map over `base`.
 fn build(ctx: &NativeCallContext, overrides: Map, base: SceneSpec) -> ScriptResult<SceneRef> {
     refuse_unused_segment(ctx, &overrides)?;
+    refuse_ignored_by_gmsh(ctx, &overrides)?;
     let mut spec: SceneSpec = overlay(ctx, overrides, &base, "scene")?;
     if let Some(g) = spec.gmsh.as_mut() {
         let bytes = crate::script::HostContext::of(ctx)?
@@ -62,6 +63,50 @@ fn refuse_unused_segment(ctx: &NativeCallContext, overrides: &Map) -> ScriptResu
         }
     }
     Ok(())
+}
+
+/// A Gmsh scene's mesh, materials and region are the file's: the layered rectangle's fields
+/// written next to `gmsh` would be ignored silently, so each is an error naming it.
+fn refuse_ignored_by_gmsh(ctx: &NativeCallContext, overrides: &Map) -> ScriptResult<()> {
+    if overrides.get("gmsh").is_none_or(|g| g.is_unit()) {
+        return Ok(());
+    }
+    for field in [
+        "laminate",
+        "width_m",
+        "element_size_x_m",
+        "element_size_y_m",
+    ] {
+        if let Some(value) = overrides.get(field) {
+            return Err(error(
+                ctx,
+                format!(
+                    "scene.{field} = {value} is not used with `gmsh` (the mesh, its materials \
+                     and its size are the file's): leave it out"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Contact options of a run act on the crack's faces: on a scene without open faces (no
+/// crack, or faces tied) they cannot apply, so they are an error naming them.
+fn refuse_contact_without_crack(
+    ctx: &NativeCallContext,
+    scene: &Scene,
+    run_options: &Map,
+) -> ScriptResult<()> {
+    match run_options.get("contact") {
+        Some(c) if !c.is_unit() && scene.crack().is_none() => Err(error(
+            ctx,
+            format!(
+                "run.contact = {c} cannot apply: the scene has no crack faces to make contact \
+                 (no crack, or tied faces)"
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// A 1-based index into `len` items, named `what` in errors.
@@ -231,8 +276,10 @@ mod scene_api {
         traction: Signal,
         run_options: Map,
     ) -> Res<RunRef> {
+        super::refuse_contact_without_crack(&ctx, scene, &run_options)?;
         let base = scene.run_config(RunConfig::default().duration_s);
         let mut o: RunConfig = overlay(&ctx, run_options, &base, "run")?;
+        o.check_snapshots().at(&ctx)?;
         if let Some(dir) = &o.snapshot_dir {
             // resolve a file inside the directory: checks the sandbox and creates it
             let host = crate::script::HostContext::of(&ctx)?;

@@ -71,7 +71,9 @@ fn window_named(ctx: &NativeCallContext, name: &str) -> ScriptResult<Window> {
 #[export_module]
 mod signal_api {
     use super::{filter, window_named, ChirpOptions};
-    use crate::script::convert::{error, floats, options, to_dynamic, WithPosition};
+    use crate::script::convert::{
+        check_script_array, error, floats, options, to_dynamic, WithPosition,
+    };
     use crate::signal as sig;
     use crate::signal::{FilterKind, Window};
     use rhai::{Array, Dynamic, Map, NativeCallContext, FLOAT, INT};
@@ -188,16 +190,20 @@ mod signal_api {
         s.energy()
     }
 
-    /// Copy of the samples as a Rhai array (explicit copy: prefer Signal methods).
-    #[rhai_fn(global, pure)]
-    pub fn samples(s: &mut Signal) -> Array {
-        s.samples.iter().map(|&x| Dynamic::from_float(x)).collect()
+    /// Copy of the samples as a Rhai array (explicit copy: prefer Signal methods); refused above the memory limit.
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn samples(ctx: NativeCallContext, s: &mut Signal) -> Res<Array> {
+        let n = s.len();
+        check_script_array(&ctx, "samples", format!("{n} samples"), 0, n)?;
+        Ok(s.samples.iter().map(|&x| Dynamic::from_float(x)).collect())
     }
 
-    /// Copy of the sample times t0 + k dt (s) as a Rhai array.
-    #[rhai_fn(global, pure)]
-    pub fn times(s: &mut Signal) -> Array {
-        s.times().into_iter().map(Dynamic::from_float).collect()
+    /// Copy of the sample times t0 + k dt (s) as a Rhai array; refused above the memory limit.
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn times(ctx: NativeCallContext, s: &mut Signal) -> Res<Array> {
+        let n = s.len();
+        check_script_array(&ctx, "times", format!("{n} samples"), 0, n)?;
+        Ok(s.times().into_iter().map(Dynamic::from_float).collect())
     }
 
     /// Linearly interpolated value at time t_s (0 outside the samples).
@@ -480,19 +486,24 @@ mod signal_api {
         sig::welch(s, n, overlap_fraction, window_named(&ctx, window)?, detrend).at(&ctx)
     }
 
-    /// Frequencies f_k = k df (Hz), copied into an array.
-    #[rhai_fn(global, get = "freqs", pure)]
-    pub fn freqs(sp: &mut Spectrum) -> Array {
-        sp.freqs_hz
+    /// Frequencies f_k = k df (Hz), copied into an array; refused above the memory limit.
+    #[rhai_fn(global, get = "freqs", pure, return_raw)]
+    pub fn freqs(ctx: NativeCallContext, sp: &mut Spectrum) -> Res<Array> {
+        let n = sp.freqs_hz.len();
+        check_script_array(&ctx, "freqs", format!("{n} frequencies"), 0, n)?;
+        Ok(sp
+            .freqs_hz
             .iter()
             .map(|&f| Dynamic::from_float(f))
-            .collect()
+            .collect())
     }
 
-    /// Power spectral density (unit^2/Hz), copied into an array.
-    #[rhai_fn(global, get = "psd", pure)]
-    pub fn psd(sp: &mut Spectrum) -> Array {
-        sp.psd.iter().map(|&p| Dynamic::from_float(p)).collect()
+    /// Power spectral density (unit^2/Hz), copied into an array; refused above the memory limit.
+    #[rhai_fn(global, get = "psd", pure, return_raw)]
+    pub fn psd(ctx: NativeCallContext, sp: &mut Spectrum) -> Res<Array> {
+        let n = sp.psd.len();
+        check_script_array(&ctx, "psd", format!("{n} frequencies"), 0, n)?;
+        Ok(sp.psd.iter().map(|&p| Dynamic::from_float(p)).collect())
     }
 
     /// Frequency resolution df (Hz).

@@ -3,7 +3,10 @@
 use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;
 
-use super::{check_alloc, finite, require_len, same_dt, Signal, SignalError, GRID_TOL};
+use super::{
+    check_alloc, check_alloc_with, fft_bytes, finite, require_len, same_dt, Signal, SignalError,
+    GRID_TOL,
+};
 
 /// Kernels shorter than this are convolved by the direct sum.
 const DIRECT_CONVOLUTION_MAX: usize = 64;
@@ -99,9 +102,16 @@ pub fn xcorr(
             end_s: lag_max_s,
         });
     }
-    check_alloc("lag window", m_hi - m_lo + 1.0)?;
     let (ny, nc) = (y.len() as i64, c.len() as i64);
     let len = fast_len((ny + nc - 1) as usize);
+    let window = m_hi - m_lo + 1.0;
+    check_alloc("lag window", window)?;
+    // the two spectra and their product, then the real correlation beside the window
+    check_alloc_with(
+        "cross-correlation",
+        len as f64,
+        fft_bytes(3, len) + 8.0 * window,
+    )?;
     let yk = forward_real(&y.samples, len);
     let ck = forward_real(&c.samples, len);
     let prod = yk.iter().zip(&ck).map(|(a, b)| a * b.conj()).collect();

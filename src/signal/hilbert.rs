@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 use rustfft::num_complex::Complex;
 
 use super::fft::{fast_len, forward_real, inverse_in_place};
-use super::{require_len, Signal, SignalError};
+use super::{check_alloc_with, fft_bytes, require_len, Signal, SignalError};
 
 /// Analytic signal `z = x + i H[x]` on the samples of `s`.
 ///
@@ -16,6 +16,8 @@ pub fn analytic(s: &Signal) -> Result<Vec<Complex<f64>>, SignalError> {
     s.validate()?;
     require_len("signal", s.len(), 1)?;
     let len = fast_len(2 * s.len());
+    // the spectrum, then the output beside it (the envelope's samples)
+    check_alloc_with("analytic signal", s.len() as f64, fft_bytes(1, len))?;
     let mut spec = forward_real(&s.samples, len);
     for (k, z) in spec.iter_mut().enumerate().skip(1) {
         if 2 * k < len {

@@ -394,10 +394,21 @@ fn check_len(name: &'static str, len: f64) -> Result<(), SignalError> {
 /// [`check_len`] for an output about to be allocated, which must also fit in the memory limit
 /// on top of the heap in use.
 fn check_alloc(name: &'static str, len: f64) -> Result<(), SignalError> {
+    check_alloc_with(name, len, 0.0)
+}
+
+/// [`check_alloc`] for an output of `len` samples computed in `work_bytes` of buffers held
+/// alongside it (FFTs: 16 bytes a complex bin).
+fn check_alloc_with(name: &'static str, len: f64, work_bytes: f64) -> Result<(), SignalError> {
     check_len(name, len)?;
-    let bytes = len * std::mem::size_of::<f64>() as f64;
+    let bytes = len * std::mem::size_of::<f64>() as f64 + work_bytes;
     crate::budget::check_memory(name, format!("{len} samples"), bytes, "use fewer samples")
         .map_err(|e| SignalError::OverMemory(e.to_string()))
+}
+
+/// Bytes of `buffers` complex FFT buffers of `len` bins.
+fn fft_bytes(buffers: usize, len: usize) -> f64 {
+    (buffers * std::mem::size_of::<rustfft::num_complex::Complex<f64>>()) as f64 * len as f64
 }
 
 /// Errors if a signal has fewer than `min` samples.

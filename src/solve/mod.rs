@@ -123,6 +123,22 @@ pub struct RunConfig {
     pub stability: Option<StabilityEstimate>,
 }
 
+impl RunConfig {
+    /// Checks the snapshot options: `snapshot_every` at least 1, and `snapshot_dir` only with
+    /// it (alone it would take no snapshot, silently).
+    pub fn check_snapshots(&self) -> Result<()> {
+        match (self.snapshot_every, &self.snapshot_dir) {
+            (Some(0), _) => Err(Error::invalid("snapshot_every", 0, "must be at least 1")),
+            (None, Some(dir)) => Err(Error::invalid(
+                "snapshot_dir",
+                dir.display(),
+                "takes no snapshot without snapshot_every (set both)",
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
 impl Default for RunConfig {
     fn default() -> Self {
         RunConfig {
@@ -274,9 +290,7 @@ fn validate(
     if config.ledger_every == 0 {
         return Err(Error::invalid("ledger_every", 0, "must be at least 1"));
     }
-    if config.snapshot_every == Some(0) {
-        return Err(Error::invalid("snapshot_every", 0, "must be at least 1"));
-    }
+    config.check_snapshots()?;
     validate_weights(dofs, sources.iter().map(|s| ("source", &s.weights)))?;
     validate_weights(dofs, receivers.iter().map(|r| ("receiver", &r.weights)))?;
     for (field, initial) in [
