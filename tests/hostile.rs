@@ -1446,7 +1446,7 @@ fn fuzz_data_point_gmsh_files_and_slurm_names() {
             1 => {
                 let k = (g.next() % 3) as usize;
                 let _ = std::fs::remove_file(&points[k]);
-                if g.next() % 4 == 0 {
+                if g.next().is_multiple_of(4) {
                     let made = std::process::Command::new("mkfifo")
                         .arg(&points[k])
                         .status();

@@ -211,11 +211,11 @@ pub(super) fn remove_stale_temps(dir: &(impl Directory + ?Sized), target: &Path)
         };
         let plausible =
             !middle.is_empty() && middle.bytes().all(|b| b.is_ascii_hexdigit() || b == b'-');
-        if !plausible
-            || !dir
-                .regular_file_age(Path::new(&name))
+        let old = || {
+            dir.regular_file_age(Path::new(&name))
                 .is_some_and(|a| a > STALE_AGE)
-        {
+        };
+        if !(plausible && old()) {
             continue;
         }
         let Ok(file) = dir.open(Path::new(&name), false) else {
