@@ -751,7 +751,7 @@ fn ctrl_c_stops_scripts_and_native_runs() {
              io::write_csv(\"after.csv\", [\"t\"], [[1.0]]);",
         ),
         (
-            // Two simulations on rayon's workers, the script's thread waiting for them.
+            // Two simulations run in parallel on the pool's workers.
             "parallel.rhai",
             "let r = trnews::simulating(scene::preset(\"smoke\", #{crack: ()})); let c = \
              signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8);\nprint(\"ready\");\n\
@@ -918,8 +918,7 @@ fn stale_temp_files_of_dead_writers_are_removed() {
     assert!(dir.0.join("x.csv").is_file());
 }
 
-/// The time limit stops simulations that run on rayon's workers (the thread running the script
-/// waits for them): a parallel TR-NEWS pass of two 2 ms transmissions (tens of seconds of
+/// The time limit stops simulations that run on rayon's workers: a parallel TR-NEWS pass of two 2 ms transmissions (tens of seconds of
 /// work) and a delayed sweep whose points each simulate over a millisecond of delay, its first
 /// pass read back from the store of a previous run. Each must stop at its limit, not when the
 /// workers finish.

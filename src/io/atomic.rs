@@ -104,7 +104,7 @@ pub(super) trait Directory {
     fn names(&self) -> Vec<String>;
     /// The age of `name` when it is a regular file (not a symlink, FIFO or directory).
     fn regular_file_age(&self, name: &Path) -> Option<Duration>;
-    /// Opens `name` with `options` (std's, converted where needed).
+    /// Opens `name` for reading and writing, created exclusively when `create_new`.
     fn open(&self, name: &Path, create_new: bool) -> io::Result<fs::File>;
     fn remove(&self, name: &Path) -> io::Result<()>;
     fn rename(&self, from: &Path, to: &Path) -> io::Result<()>;
@@ -229,8 +229,8 @@ pub(super) fn remove_stale_temps(dir: &(impl Directory + ?Sized), target: &Path)
 
 /// Writes `bytes` whole to `name` in `dir`: first to a temporary sibling with a random name,
 /// created exclusively (`O_CREAT | O_EXCL | O_NOFOLLOW`: an existing file or a symlink planted
-/// under that name is never opened, so nothing outside is overwritten) and locked while it is
-/// written, then renamed over `name`. Stale temporary files of `name` are removed first.
+/// under that name is never opened, so nothing outside is overwritten) and locked (without
+/// waiting) while it is written, then renamed over `name`. Stale temporary files of `name` are removed first.
 pub(super) fn write_whole(
     dir: &(impl Directory + ?Sized),
     name: &Path,
@@ -240,9 +240,12 @@ pub(super) fn write_whole(
     let tmp = temp_name(name);
     let tmp = Path::new(&tmp);
     let file = dir.open(tmp, true)?;
-    let written = file
-        .lock()
-        .and_then(|()| (&file).write_all(bytes))
+    // A brand-new file: nobody contends for its lock unless a stranger took it, and a file
+    // system without locks (Lustre with noflock) leaves only the age rule; neither may block
+    // or fail the write.
+    let _ = file.try_lock();
+    let written = (&file)
+        .write_all(bytes)
         .and_then(|()| dir.rename(tmp, name));
     if written.is_err() {
         let _ = dir.remove(tmp);
@@ -250,11 +253,11 @@ pub(super) fn write_whole(
     written
 }
 
-/// Writes `bytes` to `path` atomically: parent directories are created, the bytes go to
-/// a temporary file in the same directory, which is then renamed over the target
-/// (replacing an existing file). No fsync is done: outputs favour speed over
-/// durability across a power cut, but are never seen half-written. Temporary files of
-/// the same target left by a killed writer are removed first.
+/// Writes `bytes` to `path` atomically (`write_whole`): parent directories are created, the
+/// bytes go to a temporary file in the same directory, which is then renamed over the target
+/// (replacing an existing file, or a symlink, never written through). No fsync is done:
+/// outputs favour speed over durability across a power cut, but are never seen half-written.
+/// Stale temporary files of the same target are removed first (`remove_stale_temps`).
 ///
 /// While an [`OutputRoot`] is active on this thread ([`OutputRoot::within`]), `path` must lie
 /// under it and the write goes through the root's open directory: a symlink leading out of

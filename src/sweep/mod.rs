@@ -395,7 +395,9 @@ where
             store.shown(kind, &key)
         )));
     }
-    let bytes = encode(&compute()?)?;
+    let value = compute()?;
+    refuse_nan(&value).map_err(|why| Error::Named(format!("{label}: the result {why}")))?;
+    let bytes = encode(&value)?;
     store.save(kind, &key, label, Outcome::Done(bytes.clone()))?;
     decode(&bytes)
 }
