@@ -137,6 +137,16 @@ impl StochasticSpec {
                 "an ellipse axis of a fibre bundle",
             )?;
         }
+        // A floor on every epoxy layer: the report's is 20 um; 1 cm is beyond any laminate's
+        // interlayer (1 m made a 50 m stack whose mesh took minutes to be refused).
+        require_within(
+            "laminate.min_epoxy_m",
+            self.min_epoxy_m,
+            0.0,
+            0.01,
+            "m",
+            "the thinnest epoxy layer",
+        )?;
         // The draws and the layers are held at once, then the mesh (estimated in its turn).
         let per_pair = std::mem::size_of::<PairDraw>() + 2 * std::mem::size_of::<Layer>();
         crate::budget::check_memory(
