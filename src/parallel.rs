@@ -5,7 +5,8 @@
 //! that thread runs in parallel (the simulations of a TR-NEWS pass, the points of a delayed
 //! sweep) goes through [`Context`], which carries them onto each worker for the length of its
 //! task: a time limit stops every simulation of a parallel pass, a write from a worker is
-//! confined to the script's output root.
+//! confined to the script's output root. A panic on a worker of a guarded script run is
+//! recorded there, not printed, and reaches the script's thread with its location.
 
 use crate::budget::Limits;
 use crate::io::OutputRoot;
@@ -19,6 +20,7 @@ pub struct Context {
     limits: Limits,
     root: Option<OutputRoot>,
     store: Option<Arc<Store>>,
+    guarded: bool,
 }
 
 impl Context {
@@ -28,17 +30,25 @@ impl Context {
             limits: Limits::current(),
             root: crate::io::active_root(),
             store: crate::sweep::active_store(),
+            guarded: crate::script::guard::is_guarded(),
         }
     }
 
     /// Runs `f` with these settings on the current thread; its own are restored afterwards.
     pub fn within<T>(&self, f: impl FnOnce() -> T) -> T {
-        self.limits.within(|| {
-            crate::sweep::with_store(self.store.clone(), || match &self.root {
-                Some(root) => root.within(f),
-                None => crate::io::without_root(f),
+        let settled = || {
+            self.limits.within(|| {
+                crate::sweep::with_store(self.store.clone(), || match &self.root {
+                    Some(root) => root.within(f),
+                    None => crate::io::without_root(f),
+                })
             })
-        })
+        };
+        if self.guarded {
+            crate::script::guard::on_worker(settled)
+        } else {
+            settled()
+        }
     }
 }
 

@@ -5,8 +5,9 @@
 
 use clap::Parser;
 use std::ffi::OsString;
+use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Stdio};
 
 /// Write (and with --submit, submit) a Slurm job array that computes SCRIPT's sweep points in
 /// N shards, and a merge job that runs after it (afterok).
@@ -68,11 +69,12 @@ pub fn main(args: impl IntoIterator<Item = OsString>) -> Result<(), String> {
         );
         return Ok(());
     }
-    let array_id = sbatch(&[], &jobs.array_file)?;
+    let array_id = sbatch(&[], &jobs.array_file, &jobs.array_text)?;
     let dependency = format!("--dependency=afterok:{array_id}");
     let merge_id = sbatch(
         &["--kill-on-invalid-dep=yes", dependency.as_str()],
         &jobs.merge_file,
+        &jobs.merge_text,
     )?;
     println!(
         "submitted array job {array_id} ({} tasks) and merge job {merge_id} (starts when \
@@ -260,14 +262,24 @@ fn shell_words(words: &[String]) -> String {
         .join(" ")
 }
 
-/// Submits `file` with `sbatch --parsable`, returning the job id.
-fn sbatch(options: &[&str], file: &Path) -> Result<String, String> {
-    let out = Command::new("sbatch")
+/// Submits the batch script `text` (written to `file`) with `sbatch --parsable`, returning
+/// the job id. sbatch reads `text` on its standard input, not the file: what runs is what was
+/// generated, even if someone replaces the file between writing and submitting.
+fn sbatch(options: &[&str], file: &Path, text: &str) -> Result<String, String> {
+    let cannot =
+        |e: std::io::Error| format!("cannot run sbatch (is Slurm's client installed?): {e}");
+    let mut child = Command::new("sbatch")
         .arg("--parsable")
         .args(options)
-        .arg(file)
-        .output()
-        .map_err(|e| format!("cannot run sbatch (is Slurm's client installed?): {e}"))?;
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(cannot)?;
+    if let Some(mut stdin) = child.stdin.take() {
+        stdin.write_all(text.as_bytes()).map_err(cannot)?;
+    }
+    let out = child.wait_with_output().map_err(cannot)?;
     let stdout = String::from_utf8_lossy(&out.stdout);
     if !out.status.success() {
         return Err(format!(

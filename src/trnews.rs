@@ -109,6 +109,35 @@ impl RecordedChannel {
     pub const MATCH: f64 = 1e-9;
 }
 
+/// Why stored `traces` cannot be a response of `receivers` receivers on step `dt_s` from
+/// t = 0 (see [`crate::sweep::Expect`]).
+fn expect_traces(
+    traces: &[Signal],
+    receivers: usize,
+    dt_s: f64,
+) -> std::result::Result<(), String> {
+    if traces.len() != receivers {
+        return Err(format!(
+            "holds {} traces for {receivers} receivers",
+            traces.len()
+        ));
+    }
+    match traces
+        .iter()
+        .position(|t| t.dt_s != dt_s || t.t0_s != 0.0 || t.is_empty())
+    {
+        Some(i) => Err(format!(
+            "holds trace {} on step {} s from {} s with {} samples, not on step {dt_s} s \
+             from 0",
+            i + 1,
+            traces[i].dt_s,
+            traces[i].t0_s,
+            traces[i].len()
+        )),
+        None => Ok(()),
+    }
+}
+
 /// The step shared by every trace of a channel, or an error naming `what` and the trace.
 fn common_step(traces: &[Signal], what: &str) -> Result<f64> {
     let first = traces
@@ -213,14 +242,21 @@ impl Responder {
             };
             // The first pass of every later response: stored with the sweep's points.
             let inputs = (&scene.spec, dt_s, duration_s);
-            let response =
-                crate::sweep::first_pass("impulse_response", "impulse response", &inputs, || {
+            let receivers = scene.receivers.len();
+            let expect = |h: &Response| expect_traces(&h.traces, receivers, dt_s);
+            let response = crate::sweep::first_pass(
+                "impulse_response",
+                "impulse response",
+                &inputs,
+                &expect,
+                || {
                     let out = scene.apply_traction(&unit, &config)?;
                     Ok(Response {
                         traces: out.traces,
                         report: Some(out.report),
                     })
-                })?;
+                },
+            )?;
             impulse = Some(Arc::new(response));
         }
         Ok(Responder {
@@ -498,6 +534,15 @@ impl Responder {
                 let mut answers = c.answer_all(&[s], self.dt_s, duration_s)?;
                 Ok(answers.remove(0))
             }
+        }
+    }
+
+    /// The number of receivers that answer a transmission.
+    pub fn receiver_count(&self) -> usize {
+        match &self.channel {
+            Channel::Scene { scene, .. } => scene.receivers.len(),
+            Channel::Impulse(c) => c.impulse.len(),
+            Channel::Recorded(c) => c.recordings.first().map_or(0, |r| r.received.len()),
         }
     }
 
@@ -786,10 +831,44 @@ pub struct TrNews {
     pub focus: Vec<Focus>,
     /// Report of the chirp run (None when convolved).
     pub chirp_report: Option<RunReport>,
-    /// The same procedure on the error estimate's companions (2h, 4h), if any.
+    /// The same procedure on the error estimate's companions (2h, 4h), if any; a companion
+    /// has none of its own.
+    #[serde(deserialize_with = "companions_one_level")]
     pub companions: Vec<TrNews>,
     /// The transducer band every signal was seen through ("no band (raw)" without one).
     pub band: String,
+}
+
+/// Decodes [`TrNews::companions`], refusing companions inside a companion. `TrNews` is the
+/// only stored type that contains itself: without this, a forged point file nesting
+/// companions a million deep would overflow the stack while it is decoded.
+fn companions_one_level<'de, D: serde::Deserializer<'de>>(
+    decoder: D,
+) -> std::result::Result<Vec<TrNews>, D::Error> {
+    thread_local! {
+        static INSIDE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+    /// An element that cannot be decoded: a companion's companions must be empty.
+    struct Refused;
+    impl<'de> Deserialize<'de> for Refused {
+        fn deserialize<D: serde::Deserializer<'de>>(_: D) -> std::result::Result<Self, D::Error> {
+            Err(serde::de::Error::custom(
+                "a companion holds companions of its own",
+            ))
+        }
+    }
+    if INSIDE.with(|i| i.get()) {
+        return Vec::<Refused>::deserialize(decoder).map(|_| Vec::new());
+    }
+    struct Leave;
+    impl Drop for Leave {
+        fn drop(&mut self) {
+            INSIDE.with(|i| i.set(false));
+        }
+    }
+    INSIDE.with(|i| i.set(true));
+    let _leave = Leave;
+    Vec::<TrNews>::deserialize(decoder)
 }
 
 impl TrNewsSpec {
@@ -828,9 +907,60 @@ impl TrNewsSpec {
 /// of a sweep is stored with its points (see [`crate::sweep::first_pass`]).
 pub fn tr_news(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
     let inputs = (responder.identity()?, spec);
-    crate::sweep::first_pass("tr_news", "TR-NEWS first pass", &inputs, || {
+    let expect = |tr: &TrNews| expect_tr_news(tr, responder, spec);
+    crate::sweep::first_pass("tr_news", "TR-NEWS first pass", &inputs, &expect, || {
         tr_news_computed(responder, spec)
     })
+}
+
+/// Why a stored first pass cannot be `responder`'s TR-NEWS of `spec`: another spec, a
+/// response per receiver missing, a focus at a receiver that does not exist, pulse inversion
+/// where none was asked (or none where it was), companions other than the responder's.
+fn expect_tr_news(
+    tr: &TrNews,
+    responder: &Responder,
+    spec: &TrNewsSpec,
+) -> std::result::Result<(), String> {
+    if tr.spec != *spec {
+        return Err("is the first pass of another TR-NEWS spec".into());
+    }
+    let n = responder.receiver_count();
+    expect_traces(&tr.responses, n, responder.dt_s)?;
+    let wanted = if spec.receivers.is_empty() {
+        n
+    } else {
+        spec.receivers.len()
+    };
+    if tr.focus.len() != wanted {
+        return Err(format!("holds {} foci, not {wanted}", tr.focus.len()));
+    }
+    for f in &tr.focus {
+        if !(1..=n).contains(&f.receiver) {
+            return Err(format!(
+                "focuses at receiver {}, not within 1..{n}",
+                f.receiver
+            ));
+        }
+        if f.inverted.is_some() != spec.pulse_inversion
+            || f.pi_sum.is_some() != spec.pulse_inversion
+        {
+            return Err(format!(
+                "holds a pulse inversion at receiver {} unlike its spec",
+                f.receiver
+            ));
+        }
+    }
+    if tr.companions.len() != responder.companions.len() {
+        return Err(format!(
+            "holds {} companions, not {}",
+            tr.companions.len(),
+            responder.companions.len()
+        ));
+    }
+    tr.companions
+        .iter()
+        .zip(&responder.companions)
+        .try_for_each(|(t, r)| expect_tr_news(t, r, spec))
 }
 
 fn tr_news_computed(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
@@ -1264,4 +1394,87 @@ fn pulse_inversion_once(
         reports,
         residual_estimates: None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pass(companions: Vec<TrNews>) -> TrNews {
+        TrNews {
+            spec: TrNewsSpec::default(),
+            chirp: Signal::new(1e-8, 0.0, vec![0.0, 1.0]).unwrap(),
+            responses: Vec::new(),
+            focus: Vec::new(),
+            chirp_report: None,
+            companions,
+            band: String::new(),
+        }
+    }
+
+    /// A forged first pass nesting companions a million deep is refused at the second level,
+    /// never a stack overflow: TrNews is the only stored type that contains itself.
+    #[test]
+    fn stored_companions_nest_one_level_only() {
+        let flat = crate::sweep::encode(&pass(vec![pass(vec![]), pass(vec![])])).unwrap();
+        let back: TrNews = crate::sweep::decode(&flat).unwrap();
+        assert_eq!(back.companions.len(), 2);
+        // encode(pass(no companions)) = head, 0 (no companions), 0 (empty band).
+        let one = crate::sweep::encode(&pass(vec![])).unwrap();
+        let head = &one[..one.len() - 2];
+        let depth = 1_000_000;
+        let mut forged = Vec::with_capacity((head.len() + 2) * (depth + 1));
+        for _ in 0..depth {
+            forged.extend_from_slice(head);
+            forged.push(1);
+        }
+        forged.extend_from_slice(&one);
+        forged.extend(std::iter::repeat_n(0, depth));
+        // (postcard drops the message of a refusal: the error only says it did not decode)
+        let e = crate::sweep::decode::<TrNews>(&forged)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cannot decode a point"), "{e}");
+        // A companion's empty list of companions still decodes after a refusal.
+        assert!(crate::sweep::decode::<TrNews>(&flat).is_ok());
+    }
+
+    /// A stored first pass is checked against what the responder computes before it is used:
+    /// a focus at a receiver the channel does not have (which would index past its traces),
+    /// a trace missing, another spec, pulse inversion unlike the spec.
+    #[test]
+    fn forged_first_passes_fail_their_expectations() {
+        let h = |k: usize| {
+            let mut x = vec![0.0; 3000];
+            x[100 + 40 * k] = 1.0;
+            Signal::new(1e-8, 0.0, x).unwrap()
+        };
+        let r = Responder::from_impulse(vec![h(0), h(1)], 1.0, "test".into()).unwrap();
+        let spec = TrNewsSpec {
+            record_s: 10e-6,
+            window_s: 10e-6,
+            after_focus_s: 5e-6,
+            chirp: crate::signal::ChirpSpec {
+                t1_s: 5e-6,
+                total_s: 8e-6,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let tr = tr_news_computed(&r, &spec).unwrap();
+        assert_eq!(expect_tr_news(&tr, &r, &spec), Ok(()));
+        let forged = |change: &dyn Fn(&mut TrNews)| {
+            let mut t = tr.clone();
+            change(&mut t);
+            expect_tr_news(&t, &r, &spec).unwrap_err()
+        };
+        assert!(forged(&|t| t.focus[1].receiver = 9).contains("receiver 9, not within 1..2"));
+        assert!(forged(&|t| {
+            t.responses.pop();
+        })
+        .contains("1 traces for 2 receivers"));
+        assert!(forged(&|t| t.spec.record_s = 1.0).contains("another TR-NEWS spec"));
+        assert!(forged(&|t| t.focus[0].pi_sum = Some(h(0))).contains("pulse inversion"));
+        assert!(forged(&|t| t.companions.push(tr.clone())).contains("1 companions, not 0"));
+    }
 }

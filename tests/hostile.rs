@@ -716,17 +716,34 @@ fn a_panic_in_native_code_is_an_error() {
     module.set_native_fn("explode", || -> Result<(), Box<rhai::EvalAltResult>> {
         panic!("deliberate")
     });
-    h.register_module("embedded", module);
-    let err = h
-        .run_str("t.rhai", "let x = 1;\nembedded::explode();")
-        .expect_err("caught")
-        .to_string();
-    assert!(
-        err.starts_with(
-            "t.rhai: internal error (a bug, please report it): deliberate at tests/hostile.rs:"
-        ),
-        "{err}"
+    // The same on a rayon worker (parallel passes and delayed sweeps run there): recorded on
+    // the worker, carried to the script's thread with its location.
+    module.set_native_fn(
+        "explode_in_parallel",
+        || -> Result<(), Box<rhai::EvalAltResult>> {
+            let _ = trnews::parallel::try_map(&[0, 1, 2, 3], |&i| -> Result<(), ()> {
+                assert!(i != 2, "deliberate on a worker");
+                Ok(())
+            });
+            Ok(())
+        },
     );
+    h.register_module("embedded", module);
+    for (call, what) in [
+        ("explode", "deliberate"),
+        ("explode_in_parallel", "deliberate on a worker"),
+    ] {
+        let err = h
+            .run_str("t.rhai", &format!("let x = 1;\nembedded::{call}();"))
+            .expect_err("caught")
+            .to_string();
+        assert!(
+            err.starts_with(&format!(
+                "t.rhai: internal error (a bug, please report it): {what} at tests/hostile.rs:"
+            )),
+            "{err}"
+        );
+    }
     h.run_str("t.rhai", "let x = 1 + 1;")
         .expect("host still usable");
 }
@@ -1289,6 +1306,26 @@ fn fuzz_scene_run_signal_plot_and_io_calls() {
 }
 
 /// A mutation of `bytes`: flipped, cut, grown, or with a number made huge.
+/// A point file whose payload is mutated and followed by its SHA-256 again: only the typed
+/// checks after decoding stand between it and a run.
+fn resigned(g: &mut Gen, point: &[u8]) -> Vec<u8> {
+    use sha2::{Digest, Sha256};
+    let body = &point[..point.len() - 32];
+    let mut forged = match g.next() % 3 {
+        0 => mutate(g, body),
+        // A value's bytes changed in place: the layout stays valid more often.
+        _ => {
+            let mut b = body.to_vec();
+            let i = body.len() / 2 + (g.next() % (body.len() / 2) as u64) as usize;
+            b[i] = (g.next() % 256) as u8;
+            b
+        }
+    };
+    let sum = Sha256::digest(&forged);
+    forged.extend_from_slice(&sum);
+    forged
+}
+
 fn mutate(g: &mut Gen, bytes: &[u8]) -> Vec<u8> {
     let mut b = bytes.to_vec();
     let at = |g: &mut Gen, len: usize| (g.next() % len.max(1) as u64) as usize;
@@ -1423,11 +1460,19 @@ fn fuzz_data_point_gmsh_files_and_slurm_names() {
         ..HostOptions::default()
     })
     .expect("host");
+    // Point files of three kinds: a study sweep's values, a TR-NEWS first pass and a delayed
+    // point (on a measured channel: two receivers' impulse responses made up in the script).
     let sweep = "let v = study::sweep(\"s\", #{}, [1, 2, 3], |p| #{x: p * 0.5, y: [p]}); \
-                 if v[2].x != 1.5 || v[0].y[0] != 1 { throw \"wrong value read back\"; }";
+                 if v[2].x != 1.5 || v[0].y[0] != 1 { throw \"wrong value read back\"; } \
+                 let h = []; for r in 0..2 { let x = []; x.pad(4000, 0.0); x[100 + 50 * r] = 1.0; \
+                 x[700] = -0.5; h.push(signal::from_array(1e-8, 0.0, x)); } \
+                 let c = trnews::channel_from_impulse(h, #{peak_drive: 1.0}); \
+                 let tr = trnews::tr_news(c, #{record_s: 15e-6, window_s: 15e-6, \
+                 after_focus_s: 5e-6, chirp: #{t1_s: 8e-6, total_s: 10e-6}, receivers: [2]}); \
+                 trnews::delayed(c, tr, 2, [#{delays: [0.0, 1e-6], amplitudes: [1.0, 0.5]}], 2e-6);";
     h.run_str("fuzz.rhai", sweep).expect("sweep stored");
     let points: Vec<PathBuf> = files(&dir.0.join("out/points"));
-    assert_eq!(points.len(), 3);
+    assert_eq!(points.len(), 5, "{points:?}");
     let point_bytes: Vec<Vec<u8>> = points.iter().map(|p| std::fs::read(p).unwrap()).collect();
     let marker = dir.0.join("PWNED");
     let mut g = Gen(seed);
@@ -1443,15 +1488,21 @@ fn fuzz_data_point_gmsh_files_and_slurm_names() {
                 (format!("{name} mutated"), result)
             }
             1 => {
-                let k = (g.next() % 3) as usize;
+                let k = (g.next() % points.len() as u64) as usize;
                 let _ = std::fs::remove_file(&points[k]);
-                if g.next().is_multiple_of(4) {
-                    let made = std::process::Command::new("mkfifo")
-                        .arg(&points[k])
-                        .status();
-                    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
-                } else {
-                    std::fs::write(&points[k], mutate(&mut g, &point_bytes[k])).expect("point");
+                match g.next() % 4 {
+                    0 => {
+                        let made = std::process::Command::new("mkfifo")
+                            .arg(&points[k])
+                            .status();
+                        assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+                    }
+                    1 => {
+                        std::fs::write(&points[k], mutate(&mut g, &point_bytes[k])).expect("point")
+                    }
+                    // A forgery: the payload mutated and signed again with a valid checksum.
+                    _ => std::fs::write(&points[k], resigned(&mut g, &point_bytes[k]))
+                        .expect("point"),
                 }
                 let result = h.run_str("fuzz.rhai", sweep).map_err(|e| e.to_string());
                 ("a point file".into(), result)

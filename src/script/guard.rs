@@ -36,6 +36,31 @@ pub fn reset() {
     });
 }
 
+/// True while a guarded run is on this thread.
+pub fn is_guarded() -> bool {
+    GUARDED.with(Cell::get) > 0
+}
+
+/// Runs `f` guarded on a worker thread of a guarded run: a panic in `f` is recorded, not
+/// printed, and continues on its way to the run's thread (rayon carries it there) with its
+/// location in the message, since the location is recorded on the thread that panicked.
+pub fn on_worker<T>(f: impl FnOnce() -> T) -> T {
+    let previous = LOCATION.with(|l| l.borrow_mut().take());
+    let guarded = Guarded::start();
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    drop(guarded);
+    let at = LOCATION.with(|l| std::mem::replace(&mut *l.borrow_mut(), previous));
+    result.unwrap_or_else(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown panic".into());
+        let at = at.map(|l| format!(" at {l}")).unwrap_or_default();
+        std::panic::resume_unwind(Box::new(format!("{what}{at}")))
+    })
+}
+
 /// Marks a guarded run for its lifetime.
 pub struct Guarded;
 

@@ -113,15 +113,18 @@ struct ReadOptions {
 }
 
 /// A data file format and how many bytes of memory one byte of it can become at most: the
-/// file, its parsed values and the script's arrays (16 bytes per value) are held at once.
+/// file, its parsed values and the script's arrays (16 bytes per value) are held at once, and
+/// a list grown value by value may hold twice its length in capacity.
 #[derive(Clone, Copy)]
 enum Format {
-    /// 8-byte values: 8 (file) + 8 (parsed) + 16 (script) bytes per 8 bytes, 4x.
+    /// 8-byte values: 8 (file) + 8 (parsed) + 16 (script) bytes per 8 bytes, 4x (sizes known
+    /// from the header: no growth).
     Npy,
-    /// Cells of at least 2 bytes ("1,"): 2 + 8 + 16 bytes per 2 bytes, 13x; 16x allowed.
+    /// Cells of at least 2 bytes ("1,"): 2 + 2 x 8 + 2 x 16 bytes per 2 bytes, 25x; 32x
+    /// allowed.
     Csv,
-    /// Numbers of at least 2 bytes ("1,"): 2 + 32 (JSON value) + 16 bytes per 2 bytes, 25x;
-    /// 32x allowed.
+    /// Numbers of at least 2 bytes ("1,"): 2 + 2 x 32 (JSON value) + 2 x 16 bytes per 2
+    /// bytes, 49x; 64x allowed.
     Json,
 }
 
@@ -129,8 +132,8 @@ impl Format {
     fn expansion(self) -> u64 {
         match self {
             Format::Npy => 4,
-            Format::Csv => 16,
-            Format::Json => 32,
+            Format::Csv => 32,
+            Format::Json => 64,
         }
     }
 }

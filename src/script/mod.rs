@@ -15,7 +15,7 @@ mod channel;
 mod convert;
 mod figure;
 mod format;
-mod guard;
+pub(crate) mod guard;
 mod host;
 mod io;
 mod laminate;

@@ -262,7 +262,8 @@ fn sweep(
             })
         })
         .collect::<Result<Vec<_>, Box<rhai::EvalAltResult>>>()?;
-    let sweep = Sweep::start::<Plain>(&format!("sweep '{name}'"), "sweep", specs);
+    // Any plain value is a possible result of the script's function.
+    let sweep = Sweep::start::<Plain>(&format!("sweep '{name}'"), "sweep", specs, &|_| Ok(()));
     for &i in sweep.pending() {
         let start = std::time::Instant::now();
         let outcome = match f.call_within_context::<Dynamic>(ctx, (points[i].clone(),)) {

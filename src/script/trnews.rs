@@ -270,7 +270,9 @@ fn delayed_sweep(
         "convolved or recorded"
     };
     let name = format!("delayed TR-NEWS at receiver {} ({how})", focus.receiver);
-    let sweep = Sweep::start::<Delayed>(&name, "delayed", specs);
+    let estimates = !r.companions().is_empty();
+    let expect = |d: &Delayed| expect_delayed(d, r.dt_s(), estimates);
+    let sweep = Sweep::start::<Delayed>(&name, "delayed", specs, &expect);
     crate::parallel::try_for_each(sweep.pending(), |&i| {
         let start = std::time::Instant::now();
         let one = &points[i..=i];
@@ -289,6 +291,22 @@ fn delayed_sweep(
     sweep
         .finish()
         .map_err(|e| crate::script::sweep_error(ctx, e))
+}
+
+/// Why a stored point cannot be a delayed TR-NEWS point on step `dt_s` (with `estimates` when
+/// the responder has companions): see [`crate::sweep::Expect`].
+fn expect_delayed(d: &Delayed, dt_s: f64, estimates: bool) -> Result<(), String> {
+    let (sim, pred) = (&d.simulation, &d.prediction);
+    if sim.dt_s != dt_s || pred.dt_s != dt_s || sim.len() != pred.len() {
+        return Err("holds a simulation and a prediction on different grids".into());
+    }
+    if d.delays_s.len() != d.amplitudes.len() || !(d.window_s.0 <= d.window_s.1) {
+        return Err("holds delays, amplitudes or a window that do not go together".into());
+    }
+    if d.estimates.is_some() != estimates {
+        return Err("holds error estimates unlike its responder".into());
+    }
+    Ok(())
 }
 
 /// A run report in a progress line: steps, energy residual, dt/dt_crit and, with contact,

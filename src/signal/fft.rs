@@ -155,7 +155,9 @@ pub fn convolve_discrete(a: &Signal, b: &Signal) -> Result<Signal, SignalError> 
     same_dt(a.dt_s, b.dt_s)?;
     require_len("a", a.len(), 1)?;
     require_len("b", b.len(), 1)?;
-    check_alloc("convolution", (a.len() + b.len()) as f64)?;
+    let n = a.len() + b.len();
+    // three complex FFT buffers (both transforms and their product) beside the output
+    check_alloc_with("convolution", n as f64, fft_bytes(3, fast_len(n)))?;
     Ok(Signal {
         dt_s: a.dt_s,
         t0_s: a.t0_s + b.t0_s,

@@ -126,8 +126,11 @@ fn num(v: &f64) -> String {
     }
 }
 
-/// A uniformly sampled real signal: sample k is at time `t0_s + k*dt_s`.
+/// A uniformly sampled real signal: sample k is at time `t0_s + k*dt_s`. Decoding (a stored
+/// point, a data file) goes through [`Signal::new`]: a decoded signal always holds its
+/// invariants.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "SignalFields")]
 pub struct Signal {
     /// Sample interval (s), positive and finite.
     pub dt_s: f64,
@@ -135,6 +138,21 @@ pub struct Signal {
     pub t0_s: f64,
     /// Sample values.
     pub samples: Vec<f64>,
+}
+
+/// The fields of a [`Signal`] as decoded, before [`Signal::new`] checks them.
+#[derive(Deserialize)]
+struct SignalFields {
+    dt_s: f64,
+    t0_s: f64,
+    samples: Vec<f64>,
+}
+
+impl TryFrom<SignalFields> for Signal {
+    type Error = SignalError;
+    fn try_from(f: SignalFields) -> Result<Self, SignalError> {
+        Signal::new(f.dt_s, f.t0_s, f.samples)
+    }
 }
 
 impl Signal {

@@ -33,7 +33,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 mod nan;
-pub use nan::refuse_nan;
+pub use nan::{refuse_nan, refuse_non_finite};
 
 /// First bytes of every point file's payload: the layout version of [`PointFile`].
 const FORMAT: &str = "trnews-point 1";
@@ -149,8 +149,11 @@ impl Role {
 pub struct Key(String);
 
 impl Key {
-    /// The key of `inputs` for a computation of `kind`.
+    /// The key of `inputs` for a computation of `kind`; inputs holding a NaN or an infinity
+    /// are refused (JSON writes both as `null`: +inf and -inf would share a key).
     pub fn of<I: Serialize + ?Sized>(kind: &str, inputs: &I) -> Result<Key> {
+        refuse_non_finite(inputs)
+            .map_err(|why| Error::Named(format!("cannot key a {kind} point: its input {why}")))?;
         let text = serde_json::to_vec(&(
             env!("CARGO_PKG_VERSION"),
             env!("TRNEWS_SOURCE_SHA256"),
@@ -195,20 +198,61 @@ enum Found {
     Corrupt(String),
 }
 
+/// The most memory a stored value takes while it is decoded, per byte of its encoding. The
+/// worst case is a `study::sweep` value: a `()` is 1 byte encoded, a 32-byte token, a
+/// 32-byte plain value and a 16-byte script value. Typed results stay below 48 (an absent
+/// `Option<Signal>` is 1 byte encoded and 40 in memory).
+const DECODED_PER_ENCODED_BYTE: f64 = 96.0;
+
+/// What a caller checks in a decoded value beyond its type: shapes and counts that its
+/// computation guarantees (a trace per receiver, a focus per requested receiver). `Err` says
+/// what is wrong.
+pub type Expect<'a, T> = &'a dyn Fn(&T) -> std::result::Result<(), String>;
+
 impl Found {
-    /// A stored value that does not decode as a `T`, or holds a NaN, is corrupt: a checksum
-    /// finds corruption, not a forged file (see [`refuse_nan`]).
-    fn checked<T: Serialize + DeserializeOwned>(self) -> Found {
+    /// A stored value is corrupt when decoding it could exceed the memory limit, when it does
+    /// not decode as a `T` (signals are checked as they are decoded), when it holds a NaN, or
+    /// when it fails `expect`: a checksum finds corruption, not a forged file.
+    fn checked<T: Serialize + DeserializeOwned>(self, expect: Expect<T>) -> Found {
         let Found::Done(bytes) = self else {
             return self;
         };
-        match decode::<T>(&bytes).map(|v| refuse_nan(&v)) {
-            Ok(Ok(())) => Found::Done(bytes),
-            Ok(Err(why)) => Found::Corrupt(format!("its value {why}")),
-            Err(e) => Found::Corrupt(format!("unreadable: {e}")),
+        let decoded = bytes.len() as f64 * DECODED_PER_ENCODED_BYTE;
+        let hint = "raise --max-memory to read it, or remove it to recompute it";
+        let size = format!("{} bytes", bytes.len());
+        if let Err(e) = crate::budget::check_memory("a point file", size, decoded, hint) {
+            return Found::Corrupt(e.to_string());
+        }
+        let value = match decode::<T>(&bytes) {
+            Ok(value) => value,
+            Err(e) => return Found::Corrupt(format!("unreadable: {e}")),
+        };
+        match refuse_nan(&value).and_then(|()| expect(&value)) {
+            Ok(()) => Found::Done(bytes),
+            Err(why) => Found::Corrupt(format!("its value {why}")),
         }
     }
 }
+
+/// Text from a point file as it may be printed: control characters escaped (a forged file
+/// cannot send terminal escape sequences), at most [`PRINTABLE_CHARS`] characters.
+fn printable(text: &str) -> String {
+    let mut out = String::new();
+    for c in text.chars().take(PRINTABLE_CHARS) {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    if text.chars().nth(PRINTABLE_CHARS).is_some() {
+        out.push_str("...");
+    }
+    out
+}
+
+/// The longest text from a point file that is printed whole.
+const PRINTABLE_CHARS: usize = 2000;
 
 /// Encodes a value with postcard (f64 as its 8 bytes).
 pub fn encode<T: Serialize>(value: &T) -> Result<Vec<u8>> {
@@ -328,15 +372,16 @@ impl Store {
             return Found::Corrupt("checksum mismatch (truncated or corrupted)".into());
         }
         match postcard::from_bytes::<PointFile>(body) {
-            Ok(file) if file.format != FORMAT => {
-                Found::Corrupt(format!("format '{}', expected '{FORMAT}'", file.format))
-            }
+            Ok(file) if file.format != FORMAT => Found::Corrupt(format!(
+                "format '{}', expected '{FORMAT}'",
+                printable(&file.format)
+            )),
             Ok(file) if file.key != key.as_str() => {
-                Found::Corrupt(format!("holds key {}", file.key))
+                Found::Corrupt(format!("holds key {}", printable(&file.key)))
             }
             Ok(file) => match file.outcome {
                 Outcome::Done(value) => Found::Done(value),
-                Outcome::Failed(error) => Found::Failed(error),
+                Outcome::Failed(error) => Found::Failed(printable(&error)),
             },
             Err(e) => Found::Corrupt(format!("unreadable: {e}")),
         }
@@ -362,11 +407,13 @@ impl Store {
 /// Runs a shared first pass (an impulse response, the TR-NEWS chirp run and focusing)
 /// through the active store: read back when stored under the key of (`kind`, `inputs`),
 /// otherwise computed and stored. Without an active store (library use) it only computes.
-/// In a merge nothing is computed: a missing first pass is an error naming its file.
+/// In a merge nothing is computed: a missing first pass is an error naming its file. A stored
+/// value failing `expect` is corrupt and recomputed.
 pub fn first_pass<T, I>(
     kind: &str,
     label: &str,
     inputs: &I,
+    expect: Expect<T>,
     compute: impl FnOnce() -> Result<T>,
 ) -> Result<T>
 where
@@ -377,7 +424,7 @@ where
         return compute();
     };
     let key = Key::of(kind, inputs)?;
-    match store.load(kind, &key).checked::<T>() {
+    match store.load(kind, &key).checked::<T>(expect) {
         Found::Done(bytes) => {
             (store.say)(&format!("{label}: read from {}", store.shown(kind, &key)));
             return decode(&bytes);
@@ -463,21 +510,22 @@ pub struct Sweep {
 }
 
 impl Sweep {
-    /// Looks every point up in the active store (reporting corrupt files, which are
-    /// recomputed) and decides which ones this process computes.
+    /// Looks every point up in the active store (reporting corrupt files and values failing
+    /// `expect`, which are recomputed) and decides which ones this process computes.
     pub fn start<T: Serialize + DeserializeOwned>(
         name: &str,
         kind: &str,
         points: Vec<PointSpec>,
+        expect: Expect<T>,
     ) -> Sweep {
         let store = active_store();
         let role = store.as_ref().map_or(Role::Whole, |s| s.role);
         let mut slots = Vec::with_capacity(points.len());
         let mut pending = Vec::new();
         for (i, p) in points.iter().enumerate() {
-            let found = store
-                .as_ref()
-                .map_or(Found::Missing, |s| s.load(kind, &p.key).checked::<T>());
+            let found = store.as_ref().map_or(Found::Missing, |s| {
+                s.load(kind, &p.key).checked::<T>(expect)
+            });
             let slot = match found {
                 Found::Done(bytes) => Slot::Done(bytes),
                 Found::Failed(error) => Slot::Failed(error),
@@ -657,6 +705,15 @@ mod tests {
     use super::*;
 
     #[test]
+    fn text_from_point_files_prints_without_control_characters() {
+        assert_eq!(printable("a\u{1b}]0;x\u{7}\nb"), "a\\u{1b}]0;x\\u{7}\\nb");
+        assert_eq!(
+            printable(&"é".repeat(3000)).chars().count(),
+            PRINTABLE_CHARS + 3
+        );
+    }
+
+    #[test]
     fn shards_parse_one_based_and_share_points_round_robin() {
         let s = Shard::parse("2/3").unwrap();
         assert_eq!(s, Shard { index: 1, count: 3 });
@@ -719,6 +776,11 @@ mod tests {
         );
         assert_ne!(k, Key::of("other", &(1.5f64, "a", [1u8, 2])).unwrap());
         assert_eq!(k.as_str().len(), 64);
+        // JSON writes +inf, -inf and NaN as null: such inputs are refused, never keyed alike.
+        for v in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            let e = Key::of("test", &[v]).unwrap_err().to_string();
+            assert!(e.contains("cannot key a test point"), "{e}");
+        }
         let values = vec![
             0.1f64,
             -0.0,
@@ -752,7 +814,7 @@ mod tests {
         };
         let run = || {
             store.within(|| {
-                let sweep = Sweep::start::<f64>("unit", "unit", points(3));
+                let sweep = Sweep::start::<f64>("unit", "unit", points(3), &|_| Ok(()));
                 let pending = sweep.pending().to_vec();
                 for &i in &pending {
                     sweep.record(i, Ok(i as f64 * 0.1), 0.0, "").unwrap();
@@ -809,9 +871,37 @@ mod tests {
             .unwrap()
             .join("\n")
             .contains("is larger than the 32.000 B"));
+        // One small enough to read whose decoded value could exceed the limit (a forged
+        // study::sweep value of unit tokens expands ~96x) is refused before decoding.
+        let size = std::fs::metadata(file(0)).unwrap().len();
+        crate::budget::set_memory_limit(4 * size);
+        let (again, _) = run();
+        crate::budget::set_memory_limit(crate::budget::DEFAULT_MEMORY_LIMIT);
+        assert_eq!(again, vec![0, 1, 2]);
+        let said = lines.lock().unwrap().join("\n");
+        assert!(said.contains("a point file"), "{said}");
+        // A value its caller cannot have computed (here: anything but 0.0) is recomputed.
+        let only_zero = |v: &f64| {
+            if *v == 0.0 {
+                Ok(())
+            } else {
+                Err("is not 0".to_string())
+            }
+        };
+        let pending = store.within(|| {
+            Sweep::start::<f64>("unit", "unit", points(3), &only_zero)
+                .pending()
+                .to_vec()
+        });
+        assert_eq!(pending, vec![1, 2]);
+        assert!(lines
+            .lock()
+            .unwrap()
+            .join("\n")
+            .contains("is corrupt (its value is not 0)"));
         // A result holding a NaN is recorded as a failure, never stored.
         store.within(|| {
-            let sweep = Sweep::start::<f64>("nan", "nan", points(1));
+            let sweep = Sweep::start::<f64>("nan", "nan", points(1), &|_| Ok(()));
             sweep.record(0, Ok(f64::NAN), 0.0, "").unwrap();
             let err = sweep.finish::<f64>().err().unwrap().to_string();
             assert!(err.contains("the result holds a NaN"), "{err}");

@@ -1,4 +1,6 @@
-//! The check every stored value passes, written and read: no NaN anywhere in it.
+//! The check every stored value passes, written and read: no NaN anywhere in it; and the
+//! check of every key's inputs: no NaN or infinity (JSON writes both as `null`, so +inf and
+//! -inf would share a key).
 //!
 //! A point file's checksum finds corruption, not a forged value: a file written by hand with a
 //! valid checksum decodes into any value of the right type. Each value is walked through its
@@ -15,7 +17,14 @@ use std::fmt;
 
 /// `Err` naming the first NaN in `value`.
 pub fn refuse_nan<T: Serialize + ?Sized>(value: &T) -> Result<(), String> {
-    value.serialize(NanFinder).map_err(|e| e.0)
+    let finder = NanFinder { infinities: false };
+    value.serialize(finder).map_err(|e| e.0)
+}
+
+/// `Err` naming the first NaN or infinity in `value`.
+pub fn refuse_non_finite<T: Serialize + ?Sized>(value: &T) -> Result<(), String> {
+    let finder = NanFinder { infinities: true };
+    value.serialize(finder).map_err(|e| e.0)
 }
 
 #[derive(Debug)]
@@ -35,14 +44,21 @@ impl ser::Error for Found {
     }
 }
 
-/// A serializer that writes nothing and fails at the first NaN.
-struct NanFinder;
+/// A serializer that writes nothing and fails at the first NaN (or infinity, when asked).
+#[derive(Clone, Copy)]
+struct NanFinder {
+    infinities: bool,
+}
 
-fn float(v: f64) -> Result<(), Found> {
-    if v.is_nan() {
-        Err(Found("holds a NaN".into()))
-    } else {
-        Ok(())
+impl NanFinder {
+    fn float(self, v: f64) -> Result<(), Found> {
+        if v.is_nan() {
+            Err(Found("holds a NaN".into()))
+        } else if self.infinities && v.is_infinite() {
+            Err(Found(format!("holds {v}")))
+        } else {
+            Ok(())
+        }
     }
 }
 
@@ -69,10 +85,10 @@ impl ser::Serializer for NanFinder {
         serialize_str: &str, serialize_bytes: &[u8], serialize_unit_struct: &'static str);
 
     fn serialize_f32(self, v: f32) -> Result<(), Found> {
-        float(v.into())
+        self.float(v.into())
     }
     fn serialize_f64(self, v: f64) -> Result<(), Found> {
-        float(v)
+        self.float(v)
     }
     fn serialize_none(self) -> Result<(), Found> {
         Ok(())
@@ -140,11 +156,11 @@ impl ser::Serializer for NanFinder {
 /// Elements, fields and map entries: each walked in turn; a struct field's name is added to
 /// the message on the way out, so the error reads `holds a NaN in focus.peak.amplitude`.
 impl NanFinder {
-    fn element<T: Serialize + ?Sized>(v: &T) -> Result<(), Found> {
-        v.serialize(NanFinder)
+    fn element<T: Serialize + ?Sized>(self, v: &T) -> Result<(), Found> {
+        v.serialize(self)
     }
-    fn field<T: Serialize + ?Sized>(name: &str, v: &T) -> Result<(), Found> {
-        v.serialize(NanFinder)
+    fn field<T: Serialize + ?Sized>(self, name: &str, v: &T) -> Result<(), Found> {
+        v.serialize(self)
             .map_err(|Found(m)| match m.split_once(" in ") {
                 Some((what, path)) => Found(format!("{what} in {name}.{path}")),
                 None => Found(format!("{m} in {name}")),
@@ -158,7 +174,7 @@ macro_rules! walk_elements {
             type Ok = ();
             type Error = Found;
             fn $m<T: Serialize + ?Sized>(&mut self, v: &T) -> Result<(), Found> {
-                NanFinder::element(v)
+                self.element(v)
             }
             fn end(self) -> Result<(), Found> {
                 Ok(())
@@ -180,7 +196,7 @@ macro_rules! walk_fields {
                 name: &'static str,
                 v: &T,
             ) -> Result<(), Found> {
-                NanFinder::field(name, v)
+                self.field(name, v)
             }
             fn end(self) -> Result<(), Found> {
                 Ok(())
@@ -195,10 +211,10 @@ impl ser::SerializeMap for NanFinder {
     type Ok = ();
     type Error = Found;
     fn serialize_key<T: Serialize + ?Sized>(&mut self, k: &T) -> Result<(), Found> {
-        NanFinder::element(k)
+        self.element(k)
     }
     fn serialize_value<T: Serialize + ?Sized>(&mut self, v: &T) -> Result<(), Found> {
-        NanFinder::element(v)
+        self.element(v)
     }
     fn end(self) -> Result<(), Found> {
         Ok(())
@@ -207,7 +223,7 @@ impl ser::SerializeMap for NanFinder {
 
 #[cfg(test)]
 mod tests {
-    use super::refuse_nan;
+    use super::{refuse_nan, refuse_non_finite};
     use std::collections::BTreeMap;
 
     #[derive(serde::Serialize)]
@@ -249,5 +265,10 @@ mod tests {
         );
         let map = BTreeMap::from([("a", vec![(1u8, f64::NAN)])]);
         assert!(refuse_nan(&map).is_err());
+        assert_eq!(
+            refuse_non_finite(&focus(f64::NEG_INFINITY, 2.0, None)),
+            Err("holds -inf in peak.amplitude".into())
+        );
+        assert_eq!(refuse_non_finite(&focus(1.0, 2.0, Some(3.0))), Ok(()));
     }
 }
