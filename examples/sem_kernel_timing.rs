@@ -45,6 +45,7 @@ fn main() {
     ] {
         let spec = SemSpec {
             order_x: p,
+            min_order_y: 1,
             max_order_y: p,
             element_size_x_m: h,
             element_size_y_m: h,

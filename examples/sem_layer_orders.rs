@@ -27,6 +27,7 @@ fn build(
 ) -> SemModel {
     let cut = SemSpec {
         order_x: px,
+        min_order_y: 1,
         max_order_y: max_y,
         element_size_x_m: hx,
         element_size_y_m: row_m,

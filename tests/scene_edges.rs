@@ -311,6 +311,7 @@ fn sem_errors(order: usize, dt: f64) -> Vec<f64> {
         element_size_y_m: 0.15e-3,
         discretisation: DiscretisationSpec::Sem {
             order_x: order,
+            min_order_y: 1,
             max_order_y: order,
         },
         ..spec(H0, EdgeCondition::Roller)

@@ -16,6 +16,7 @@ use trnews::trnews::{Responder, TrNewsSpec};
 fn sem(order: usize) -> DiscretisationSpec {
     DiscretisationSpec::Sem {
         order_x: order,
+        min_order_y: 1,
         max_order_y: order,
     }
 }
@@ -194,13 +195,16 @@ fn error_of(spec: &SceneSpec) -> String {
 
 #[test]
 fn bad_sem_scenes_are_errors_naming_the_field() {
-    for (order_x, max_order_y, field) in [
-        (0, 4, "discretisation.order_x"),
-        (4, 17, "discretisation.max_order_y"),
+    for (order_x, min_order_y, max_order_y, field) in [
+        (0, 1, 4, "discretisation.order_x"),
+        (4, 1, 17, "discretisation.max_order_y"),
+        (4, 0, 4, "discretisation.min_order_y"),
+        (4, 5, 4, "discretisation.min_order_y"),
     ] {
         let spec = SceneSpec {
             discretisation: DiscretisationSpec::Sem {
                 order_x,
+                min_order_y,
                 max_order_y,
             },
             ..smoke_sem()
@@ -240,7 +244,7 @@ fn bad_sem_scenes_are_errors_naming_the_field() {
 #[test]
 fn sem_companions_lower_the_order_and_keep_the_elements() {
     use trnews::accuracy::Refinement;
-    use trnews::scene::{DiscretisationKind, Resolution};
+    use trnews::scene::{DiscretisationKind, Resolution, SemPreset};
     let spec = SceneSpec::preset(Resolution::Quick);
     assert_eq!(spec.refinement(), Refinement::Orders);
     let orders = spec.companions().unwrap().map(|c| {
@@ -253,6 +257,7 @@ fn sem_companions_lower_the_order_and_keep_the_elements() {
     });
     let expected = [(6, 3), (5, 3)].map(|(order_x, max_order_y)| DiscretisationSpec::Sem {
         order_x,
+        min_order_y: SemPreset::of(Resolution::Quick).min_order_y,
         max_order_y,
     });
     assert_eq!(orders, expected);

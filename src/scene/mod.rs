@@ -10,7 +10,7 @@ use crate::fem::{AbsorbingEdge, Model};
 use crate::laminate::{Laminate, Layer, StochasticSpec};
 use crate::material::{Orthotropic, Plane};
 use crate::mesh::{Grid, Mesh, Side};
-use crate::sem::SemModel;
+use crate::sem::{SemModel, SemSpec};
 use crate::signal::Signal;
 use crate::solve::{
     self, point_receiver, segment_receiver, segment_shares, Quantity, Receiver, RunConfig,
@@ -474,8 +474,14 @@ impl std::str::FromStr for DiscretisationKind {
     }
 }
 
+/// Lowest order across an element row at the quick (and smoke) resolution: see
+/// [`SemPreset::of`].
+const MIN_ORDER_Y_QUICK: usize = 2;
+/// Lowest order across an element row at the paper resolution.
+const MIN_ORDER_Y_PAPER: usize = 3;
+
 /// Spectral elements of a resolution preset: element sizes and the orders (along x, and the
-/// most across y).
+/// least and most across y).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SemPreset {
     /// Element width (m).
@@ -484,6 +490,8 @@ pub struct SemPreset {
     pub element_size_y_m: f64,
     /// Polynomial order along x.
     pub order_x: usize,
+    /// Lowest polynomial order across an element row.
+    pub min_order_y: usize,
     /// Highest polynomial order across an element row.
     pub max_order_y: usize,
 }
@@ -494,14 +502,15 @@ impl SemPreset {
     /// 0.5 mm elements with at most order 3 across, within 2% at about 2x the run time of
     /// the T3 quick scene; paper order 6 on 0.25 mm, within 0.3%.
     pub fn of(resolution: Resolution) -> SemPreset {
-        let (size, order_x, max_order_y) = match resolution {
-            Resolution::Smoke | Resolution::Quick => (0.5e-3, 7, 3),
-            Resolution::Paper => (0.25e-3, 6, 6),
+        let (size, order_x, min_order_y, max_order_y) = match resolution {
+            Resolution::Smoke | Resolution::Quick => (0.5e-3, 7, MIN_ORDER_Y_QUICK, 3),
+            Resolution::Paper => (0.25e-3, 6, MIN_ORDER_Y_PAPER, 6),
         };
         SemPreset {
             element_size_x_m: size,
             element_size_y_m: size,
             order_x,
+            min_order_y,
             max_order_y,
         }
     }
@@ -526,9 +535,36 @@ pub enum DiscretisationSpec {
     Sem {
         /// Polynomial order along x.
         order_x: usize,
+        /// Lowest polynomial order across an element row (1 when not given).
+        #[serde(default = "order_one")]
+        min_order_y: usize,
         /// Highest polynomial order across an element row.
         max_order_y: usize,
     },
+}
+
+fn order_one() -> usize {
+    1
+}
+
+impl DiscretisationSpec {
+    /// How spectral elements of these orders cut `spec`'s laminate (None on triangles).
+    pub fn sem_cut(&self, spec: &SceneSpec) -> Option<SemSpec> {
+        match *self {
+            DiscretisationSpec::T3 => None,
+            DiscretisationSpec::Sem {
+                order_x,
+                min_order_y,
+                max_order_y,
+            } => Some(SemSpec {
+                order_x,
+                min_order_y,
+                max_order_y,
+                element_size_x_m: spec.element_size_x_m,
+                element_size_y_m: spec.element_size_y_m,
+            }),
+        }
+    }
 }
 
 /// The report's default scene on its own linear triangles, 60 x 40 um: the `quick` preset on
@@ -627,6 +663,7 @@ impl SceneSpec {
                     element_size_y_m: p.element_size_y_m,
                     discretisation: DiscretisationSpec::Sem {
                         order_x: p.order_x,
+                        min_order_y: p.min_order_y,
                         max_order_y: p.max_order_y,
                     },
                     ..t3
@@ -645,6 +682,7 @@ impl SceneSpec {
             DiscretisationSpec::T3 => Ok([self.coarsened(2.0)?, self.coarsened(4.0)?]),
             DiscretisationSpec::Sem {
                 order_x,
+                min_order_y,
                 max_order_y,
             } => {
                 if order_x < 3 {
@@ -658,6 +696,7 @@ impl SceneSpec {
                 let lowered = |by: usize| SceneSpec {
                     discretisation: DiscretisationSpec::Sem {
                         order_x: order_x - by,
+                        min_order_y: min_order_y.min(order_x - by),
                         max_order_y: max_order_y.min(order_x - by),
                     },
                     ..self.clone()
@@ -1004,12 +1043,9 @@ impl Scene {
         if let Some(contact) = spec.contact() {
             contact.validate()?;
         }
-        let scene = match spec.discretisation {
-            DiscretisationSpec::T3 => build_t3(spec)?,
-            DiscretisationSpec::Sem {
-                order_x,
-                max_order_y,
-            } => sem::build(spec, order_x, max_order_y)?,
+        let scene = match spec.discretisation.sem_cut(spec) {
+            None => build_t3(spec)?,
+            Some(cut) => sem::build(spec, &cut)?,
         };
         crate::budget::check()?;
         let dt_crit = scene.stability.dt_crit_s;

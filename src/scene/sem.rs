@@ -16,19 +16,13 @@ use crate::solve::{
     self, Integrator, Quantity, Receiver, RunConfig, RunOutput, Source, StabilityEstimate,
 };
 
-/// The scene on spectral elements of orders `order_x` and up to `max_order_y` (see
+/// The scene on spectral elements cut as `cut` says (see
 /// [`super::DiscretisationSpec::Sem`]).
-pub(super) fn build(spec: &SceneSpec, order_x: usize, max_order_y: usize) -> Result<Scene> {
-    check_options(spec, order_x, max_order_y)?;
+pub(super) fn build(spec: &SceneSpec, cut: &SemSpec) -> Result<Scene> {
+    check_options(spec, cut)?;
     let laminate = build_laminate(&spec.laminate, spec.plane)?;
-    check_mesh_size(spec, &laminate, (order_x, max_order_y))?;
-    let cut = SemSpec {
-        order_x,
-        max_order_y,
-        element_size_x_m: spec.element_size_x_m,
-        element_size_y_m: spec.element_size_y_m,
-    };
-    let mut model = SemModel::layered(&laminate, spec.width_m, &cut)?;
+    check_mesh_size(spec, &laminate, (cut.order_x, cut.max_order_y))?;
+    let mut model = SemModel::layered(&laminate, spec.width_m, cut)?;
     crate::budget::check()?;
     let height = laminate.thickness_m();
     let layer_material: Vec<usize> = laminate.layers.iter().map(|l| l.material).collect();
@@ -100,8 +94,9 @@ pub(super) fn build(spec: &SceneSpec, order_x: usize, max_order_y: usize) -> Res
 }
 
 /// Refuses what spectral-element scenes do not take: a Gmsh mesh, orders outside
-/// 1..=[`MAX_ORDER`], a width that is not a positive length.
-fn check_options(spec: &SceneSpec, order_x: usize, max_order_y: usize) -> Result<()> {
+/// 1..=[`MAX_ORDER`] or a lowest order across above the highest, a width that is not a
+/// positive length.
+fn check_options(spec: &SceneSpec, cut: &SemSpec) -> Result<()> {
     if let Some(g) = &spec.gmsh {
         return Err(Error::invalid(
             "discretisation.kind",
@@ -113,8 +108,9 @@ fn check_options(spec: &SceneSpec, order_x: usize, max_order_y: usize) -> Result
         ));
     }
     for (field, order) in [
-        ("discretisation.order_x", order_x),
-        ("discretisation.max_order_y", max_order_y),
+        ("discretisation.order_x", cut.order_x),
+        ("discretisation.min_order_y", cut.min_order_y),
+        ("discretisation.max_order_y", cut.max_order_y),
     ] {
         if !(1..=MAX_ORDER).contains(&order) {
             return Err(Error::invalid(
@@ -123,6 +119,16 @@ fn check_options(spec: &SceneSpec, order_x: usize, max_order_y: usize) -> Result
                 format!("must be 1..={MAX_ORDER}"),
             ));
         }
+    }
+    if cut.min_order_y > cut.max_order_y {
+        return Err(Error::invalid(
+            "discretisation.min_order_y",
+            cut.min_order_y,
+            format!(
+                "must be at most discretisation.max_order_y = {}",
+                cut.max_order_y
+            ),
+        ));
     }
     require_positive("width_m", spec.width_m)?;
     Ok(())

@@ -849,6 +849,7 @@ fn round_off_does_not_change_the_order_across() {
     let laminate = crate::laminate::Laminate::homogeneous(material("epoxy"), 30e-3).unwrap();
     let spec = crate::sem::SemSpec {
         order_x: 7,
+        min_order_y: 1,
         max_order_y: 7,
         element_size_x_m: 0.5e-3,
         element_size_y_m: 0.5e-3,
@@ -856,4 +857,44 @@ fn round_off_does_not_change_the_order_across() {
     let m = SemModel::layered(&laminate, 30e-3, &spec).unwrap();
     let orders: Vec<usize> = m.gll_y.iter().map(Gll::order).collect();
     assert_eq!(orders, vec![7; 60]);
+}
+
+/// The order across a row is judged per material: a 20 um row of epoxy (2.6x slower than the
+/// 0/90 fabric along x) takes order 2, a 20 um row of the fabric itself order 1 (its gap
+/// would be crossed faster than the smallest gap along x); a floor raises both; and the
+/// orders are those whose smallest gap a wave takes no less time to cross than the x gap.
+#[test]
+fn the_order_across_is_judged_per_material_above_a_floor() {
+    use crate::laminate::{Laminate, Layer};
+    let (epoxy, fabric) = (material("epoxy"), material("fabric_0_90"));
+    let layers = [(1, 1e-3), (0, 20e-6), (1, 20e-6), (1, 1e-3)]
+        .map(|(material, thickness_m)| Layer {
+            material,
+            thickness_m,
+        })
+        .to_vec();
+    let lam = Laminate::from_layers(vec![epoxy.clone(), fabric.clone()], layers).unwrap();
+    let orders = |min_order_y| {
+        let spec = crate::sem::SemSpec {
+            order_x: 6,
+            min_order_y,
+            max_order_y: 6,
+            element_size_x_m: 0.25e-3,
+            element_size_y_m: 0.25e-3,
+        };
+        let m = SemModel::layered(&lam, 2e-3, &spec).unwrap();
+        m.row_orders()[4..6].to_vec()
+    };
+    assert_eq!(orders(1), vec![2, 1], "epoxy, then fabric");
+    assert_eq!(orders(3), vec![3, 3]);
+    // the rule's arithmetic, from the wave speeds
+    let gap = |h: f64, p: usize| {
+        let g = Gll::new(p);
+        0.5 * h * (g.points[1] - g.points[0])
+    };
+    let (e, f) = (epoxy.wave_speeds(), fabric.wave_speeds());
+    let x_crossing = gap(0.25e-3, 6) / f.p_x_m_s.max(f.s_m_s);
+    assert!(gap(20e-6, 2) / e.p_y_m_s.max(e.s_m_s) >= x_crossing);
+    assert!(gap(20e-6, 3) / e.p_y_m_s.max(e.s_m_s) < x_crossing);
+    assert!(gap(20e-6, 1) / f.p_y_m_s.max(f.s_m_s) < x_crossing);
 }

@@ -201,6 +201,7 @@ impl WaveStrip {
         };
         let cut = trnews::sem::SemSpec {
             order_x: order,
+            min_order_y: 1,
             max_order_y: order,
             element_size_x_m: width,
             element_size_y_m: width,
