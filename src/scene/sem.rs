@@ -194,7 +194,7 @@ pub(super) fn run(
     dt_crit_s: f64,
 ) -> Result<RunOutput> {
     match config.integrator {
-        Integrator::Explicit => {
+        Integrator::Explicit | Integrator::FourthOrder => {
             solve::run_central_difference_on(model, dt_crit_s, sources, receivers, config)
         }
         Integrator::Newmark { consistent_mass } => {

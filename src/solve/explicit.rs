@@ -23,9 +23,9 @@ use rayon::prelude::*;
 /// Per-DOF constants of the scheme.
 pub struct Coefficients {
     /// dt^2 / m, zero on fixed DOFs.
-    a: Vec<f64>,
+    pub(super) a: Vec<f64>,
     /// (DOF, c, r = c dt / 2m) for every dashpot.
-    dashpots: Vec<(usize, f64, f64)>,
+    pub(super) dashpots: Vec<(usize, f64, f64)>,
     /// Compliance of the corrected update, dt^2 / (m (1 + r)): how far a unit force moves a
     /// DOF in one step (the contact solvers' D).
     pub compliance: Vec<f64>,

@@ -27,6 +27,17 @@ pub enum Velocity<'a> {
         /// u_{n+1}.
         next: &'a [f64],
     },
+    /// The central difference made fourth-order (the modified-equation scheme):
+    /// (u_{n+1} - u_{n-1}) / (2 dt) - (dt^2 / 6) j_n, with the third derivative j_n from the
+    /// accelerations of the last three steps, (3 a_n - 4 a_{n-1} + a_{n-2}) / (2 dt).
+    Corrected {
+        /// u_{n-1}.
+        previous: &'a [f64],
+        /// u_{n+1}.
+        next: &'a [f64],
+        /// a_n, a_{n-1}, a_{n-2}.
+        accelerations: [&'a [f64]; 3],
+    },
     /// A velocity the integrator carries (Newmark's v_n).
     Nodal(&'a [f64]),
 }
@@ -52,6 +63,20 @@ impl Fields<'_> {
                     .map(|&(d, w)| w * (next[d] - previous[d]))
                     .sum::<f64>()
                     / (2.0 * self.dt_s)
+            }
+            Velocity::Corrected {
+                previous,
+                next,
+                accelerations: [a0, a1, a2],
+            } => {
+                let dt = self.dt_s;
+                weights
+                    .iter()
+                    .map(|&(d, w)| {
+                        let central = (next[d] - previous[d]) / (2.0 * dt);
+                        w * (central - dt / 12.0 * (3.0 * a0[d] - 4.0 * a1[d] + a2[d]))
+                    })
+                    .sum()
             }
             Velocity::Nodal(v) => weights.iter().map(|&(d, w)| w * v[d]).sum(),
         }
