@@ -163,15 +163,15 @@ fn the_data_directory_defaults_to_the_script_directory() {
 #[test]
 fn files_above_a_share_of_the_memory_limit_are_refused_with_their_size() {
     let dir = TempDir::new("size");
-    // 1 MiB limit: CSV up to 1/16 (64 KiB), NPY up to 1/4 (256 KiB), JSON up to 1/32
+    // 1 MiB limit: CSV up to 1/32 (32 KiB), NPY up to 1/4 (256 KiB), JSON up to 1/64
     std::fs::write(dir.0.join("big.csv"), vec![b'1'; 100 << 10]).expect("file");
     std::fs::write(dir.0.join("big.npy"), vec![b'1'; 300 << 10]).expect("file");
     std::fs::write(dir.0.join("big.json"), vec![b'1'; 40 << 10]).expect("file");
     let h = host(&dir.0, &dir.0, 1 << 20);
     for (call, size, limit) in [
-        (r#"io::read_csv("big.csv")"#, "100.000 KiB", "64.000 KiB"),
+        (r#"io::read_csv("big.csv")"#, "100.000 KiB", "32.000 KiB"),
         (r#"io::read_npy("big.npy")"#, "300.000 KiB", "256.000 KiB"),
-        (r#"io::read_json("big.json")"#, "40.000 KiB", "32.000 KiB"),
+        (r#"io::read_json("big.json")"#, "40.000 KiB", "16.000 KiB"),
     ] {
         let e = failure(&h, &format!("{call};"));
         assert!(
