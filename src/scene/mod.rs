@@ -767,9 +767,7 @@ impl SceneSpec {
     }
 }
 
-/// The default time step of a scene's runs as a fraction of its dt_crit (the Lanczos estimate
-/// is at or slightly above the true limit; 10% margin).
-pub const STEP_FRACTION: f64 = 0.9;
+pub use crate::solve::STEP_FRACTION;
 
 /// The discrete model of a scene.
 // One per scene, shared behind an Arc: the variants' different sizes cost nothing.

@@ -36,6 +36,11 @@ pub use stability::StabilityEstimate;
 use std::time::Instant;
 pub use stepper::{drive, EnergySample, Fields, Observer, Stepper, Velocity};
 
+/// The default time step of every run as a fraction of its dt_crit (the Lanczos estimate is
+/// at or slightly above the true limit; 10% margin): `RunConfig::step_safety`, a scene's
+/// default step, a script responder's `step_fraction`.
+pub const STEP_FRACTION: f64 = 0.9;
+
 /// Which integrator advances the model.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case", tag = "kind")]
@@ -94,7 +99,7 @@ pub struct Receiver {
 pub struct RunConfig {
     /// Time step; `None` takes `step_safety * dt_crit` (explicit) (s).
     pub dt_s: Option<f64>,
-    /// Fraction of dt_crit used when `dt_s` is `None`.
+    /// Fraction of dt_crit used when `dt_s` is `None` (default [`STEP_FRACTION`]).
     pub step_safety: f64,
     /// Simulated duration (s).
     pub duration_s: f64,
@@ -148,7 +153,7 @@ impl Default for RunConfig {
     fn default() -> Self {
         RunConfig {
             dt_s: None,
-            step_safety: 0.9,
+            step_safety: STEP_FRACTION,
             duration_s: 60e-6,
             integrator: Integrator::Explicit,
             force: false,
