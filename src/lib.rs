@@ -22,6 +22,7 @@ pub mod fem;
 #[cfg(feature = "plot")]
 pub mod figures;
 pub mod format;
+pub(crate) mod guard;
 #[cfg(feature = "io")]
 pub mod input;
 pub mod io;

@@ -30,7 +30,7 @@ impl Context {
             limits: Limits::current(),
             root: crate::io::active_root(),
             store: crate::sweep::active_store(),
-            guarded: crate::script::guard::is_guarded(),
+            guarded: crate::guard::is_guarded(),
         }
     }
 
@@ -45,7 +45,7 @@ impl Context {
             })
         };
         if self.guarded {
-            crate::script::guard::on_worker(settled)
+            crate::guard::on_worker(settled)
         } else {
             settled()
         }

@@ -15,7 +15,6 @@ mod channel;
 mod convert;
 mod figure;
 mod format;
-pub(crate) mod guard;
 mod host;
 mod io;
 mod laminate;
@@ -462,8 +461,8 @@ impl Host {
     /// statement-level debugger hook made every script operation about 17x slower (measured
     /// on a loop of 2 million additions: 216 s against 12.6 s).
     fn guarded<T>(&self, name: &str, f: impl FnOnce() -> T) -> Result<T, ScriptError> {
-        guard::reset();
-        let _guarded = guard::Guarded::start();
+        crate::guard::reset();
+        let _guarded = crate::guard::Guarded::start();
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|payload| {
             let what = payload
                 .downcast_ref::<&str>()
@@ -472,7 +471,7 @@ impl Host {
                 .unwrap_or_else(|| "unknown panic".into());
             let message = format!(
                 "internal error (a bug, please report it): {what}{}",
-                guard::panic_location()
+                crate::guard::panic_location()
                     .map(|l| format!(" at {l}"))
                     .unwrap_or_default()
             );

@@ -1,8 +1,8 @@
-//! The host's last line of defence: a panic hook that records where a panic happened without
-//! printing it while a script runs (the host turns it into a one-line error instead).
+//! The script host's last line of defence: a panic hook that records where a panic happened
+//! without printing it while a script runs (the host turns it into a one-line error instead),
+//! on the script's thread and on the workers its parallel loops use ([`crate::parallel`]).
 
 use std::cell::{Cell, RefCell};
-use std::sync::Once;
 
 thread_local! {
     /// Guarded script runs on this thread (a panic here is then recorded, not printed).
@@ -13,14 +13,16 @@ thread_local! {
 }
 
 /// Where the last recorded panic on this thread happened (Rust source file:line:column).
+#[cfg(feature = "script")]
 pub fn panic_location() -> Option<String> {
     LOCATION.with(|l| l.borrow().clone())
 }
 
 /// Clears the panic location before a run, and installs the panic hook once.
+#[cfg(feature = "script")]
 pub fn reset() {
     LOCATION.with(|l| *l.borrow_mut() = None);
-    static HOOK: Once = Once::new();
+    static HOOK: std::sync::Once = std::sync::Once::new();
     HOOK.call_once(|| {
         let previous = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
