@@ -19,6 +19,24 @@ const CENTRE: f64 = 0.5e-6;
 /// bottom once.
 const DURATION: f64 = 3e-6;
 
+/// A strip of `layers` (top down) on spectral elements of `order`, 0.5 mm wide (one element),
+/// rollers on the sides and the `bottom` edge.
+fn sem_strip(
+    layers: &[(trnews::material::Material, f64)],
+    order: usize,
+    bottom: BottomEdge,
+) -> WaveStrip {
+    WaveStrip::new(
+        Discretisation::Sem {
+            order,
+            width: 0.5e-3,
+        },
+        layers,
+        false,
+        bottom,
+    )
+}
+
 /// A 3 mm epoxy strip on order-6 spectral elements, rollers on the sides and the `bottom`
 /// edge: `quantity` 1 mm down under a uniform pressure pulse, at step `dt` with
 /// `integrator`, and the run's peak energy residual.
@@ -28,15 +46,7 @@ fn recorded(
     integrator: Integrator,
     dt: f64,
 ) -> (Signal, f64) {
-    let strip = WaveStrip::new(
-        Discretisation::Sem {
-            order: 6,
-            width: 0.5e-3,
-        },
-        &[(epoxy(), 3e-3)],
-        false,
-        bottom,
-    );
+    let strip = sem_strip(&[(epoxy(), 3e-3)], 6, bottom);
     let pulse = gaussian(dt, DURATION, CENTRE, WIDTH, 1.0);
     let source = strip.top_traction(270.0, pulse);
     let mut receiver = strip.depth_receiver(1e-3, 1);
@@ -62,16 +72,7 @@ fn distance(a: &Signal, reference: &Signal) -> f64 {
 
 /// The critical step of central differences on the epoxy strip with a fixed bottom.
 fn dt_crit() -> f64 {
-    WaveStrip::new(
-        Discretisation::Sem {
-            order: 6,
-            width: 0.5e-3,
-        },
-        &[(epoxy(), 3e-3)],
-        false,
-        BottomEdge::Fixed,
-    )
-    .dt_crit()
+    sem_strip(&[(epoxy(), 3e-3)], 6, BottomEdge::Fixed).dt_crit()
 }
 
 /// Halving the step divides the fourth-order scheme's error by 16 and central differences'
@@ -117,15 +118,7 @@ fn fourth_order_in_time_on_a_closed_strip() {
 /// differences reach 1e-13 on such runs).
 #[test]
 fn the_ledger_closes_with_a_source() {
-    let strip = WaveStrip::new(
-        Discretisation::Sem {
-            order: 6,
-            width: 0.5e-3,
-        },
-        &[(epoxy(), 1e-3), (fabric(), 2e-3)],
-        false,
-        BottomEdge::Fixed,
-    );
+    let strip = sem_strip(&[(epoxy(), 1e-3), (fabric(), 2e-3)], 6, BottomEdge::Fixed);
     let dt = 0.9 * STABILITY_GAIN * strip.dt_crit();
     let config = RunConfig {
         duration_s: 2000.0 * dt,
@@ -144,15 +137,7 @@ fn the_ledger_closes_with_a_source() {
 /// Dashpots (absorbing and viscous-spring edges) are refused, naming why.
 #[test]
 fn dashpots_are_refused() {
-    let strip = WaveStrip::new(
-        Discretisation::Sem {
-            order: 4,
-            width: 0.5e-3,
-        },
-        &[(epoxy(), 1e-3)],
-        false,
-        BottomEdge::Absorbing,
-    );
+    let strip = sem_strip(&[(epoxy(), 1e-3)], 4, BottomEdge::Absorbing);
     let config = RunConfig {
         duration_s: 1e-6,
         integrator: Integrator::FourthOrder,
@@ -170,15 +155,7 @@ fn dashpots_are_refused() {
 /// refused, and when forced, the ledger stops it as it blows up.
 #[test]
 fn stable_to_sqrt_3_times_the_central_difference_step() {
-    let strip = WaveStrip::new(
-        Discretisation::Sem {
-            order: 6,
-            width: 0.5e-3,
-        },
-        &[(epoxy(), 3e-3)],
-        false,
-        BottomEdge::Fixed,
-    );
+    let strip = sem_strip(&[(epoxy(), 3e-3)], 6, BottomEdge::Fixed);
     let dt_crit = strip.dt_crit();
     let run = |ratio: f64, steps: f64, force: bool| {
         let dt = ratio * STABILITY_GAIN * dt_crit;

@@ -67,6 +67,53 @@ impl Coefficients {
     }
 }
 
+impl Coefficients {
+    /// The dashpots' implicit correction of an explicit update `next` (the damping term
+    /// C (u_{n+1} - u_{n-1}) / 2dt solved DOF by DOF); returns the energy they absorbed over
+    /// the step.
+    pub(super) fn damp(&self, u_prev: &[f64], u: &[f64], next: &mut [f64], dt: f64) -> f64 {
+        let mut loss = 0.0;
+        for &(d, c, r) in &self.dashpots {
+            let q = next[d] - 2.0 * u[d] + u_prev[d];
+            next[d] = (q + 2.0 * u[d] - (1.0 - r) * u_prev[d]) / (1.0 + r);
+            let du = next[d] - u_prev[d];
+            loss += c * du * du / (4.0 * dt);
+        }
+        loss
+    }
+}
+
+/// Twice the kinetic and strain energies at t_{n-1/2}: sum m v^2 with v = (u_n - u_{n-1})/dt,
+/// and sum `strain(k, buffer[k])` over the DOFs. Summed in parallel over fixed chunks of DOFs,
+/// each chunk's two sums left in its first two entries of `buffer`, then added in order: the
+/// result does not depend on the thread count.
+pub(super) fn energy_sums(
+    buffer: &mut [f64],
+    (u_prev, u, mass): (&[f64], &[f64], &[f64]),
+    dt: f64,
+    strain: impl Fn(usize, f64) -> f64 + Sync,
+) -> (f64, f64) {
+    buffer
+        .par_chunks_mut(ENERGY_CHUNK)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            let start = c * ENERGY_CHUNK;
+            let (mut kinetic, mut sum) = (0.0, 0.0);
+            for (i, &b) in chunk.iter().enumerate() {
+                let k = start + i;
+                let v = (u[k] - u_prev[k]) / dt;
+                kinetic += mass[k] * v * v;
+                sum += strain(k, b);
+            }
+            // DOFs come in pairs and the chunk size is even: every chunk has 2+ entries.
+            chunk[0] = kinetic;
+            chunk[1] = sum;
+        });
+    buffer
+        .chunks(ENERGY_CHUNK)
+        .fold((0.0, 0.0), |(k, s), chunk| (k + chunk[0], s + chunk[1]))
+}
+
 /// The dashpots of a periodic model: a tied DOF pair moves as one DOF of mass m_l + m_r and
 /// damping c_l + c_r, so both members get r = (c_l + c_r) dt / (2 (m_l + m_r)) (each keeps
 /// its own c for the dissipated energy).
@@ -199,12 +246,7 @@ impl<D: Discretisation, C: ContactLaw> Stepper for CentralDifference<'_, D, C> {
             u_next[l] = tied;
             u_next[r] = tied;
         }
-        for &(d, c, r) in &self.coef.dashpots {
-            let q = u_next[d] - 2.0 * u[d] + u_prev[d];
-            u_next[d] = (q + 2.0 * u[d] - (1.0 - r) * u_prev[d]) / (1.0 + r);
-            let du = u_next[d] - u_prev[d];
-            self.flows.dashpot_loss += c * du * du / (4.0 * self.dt);
-        }
+        self.flows.dashpot_loss += self.coef.damp(u_prev, u, u_next, self.dt);
         self.contact.correct(u_prev, u_next, &mut self.flows)?;
         self.add_source_work(step);
         Ok(())
@@ -228,37 +270,13 @@ impl<D: Discretisation, C: ContactLaw> Stepper for CentralDifference<'_, D, C> {
     }
 
     /// Energy at t_{n-1/2}: kinetic 1/2 v^T M v with v = (u_n - u_{n-1})/dt, strain
-    /// 1/2 u_{n-1}^T K u_n. Summed in parallel over fixed chunks of DOFs, the chunk sums then
-    /// added in order: the result does not depend on the thread count.
+    /// 1/2 u_{n-1}^T K u_n ([`energy_sums`], with K u_n as the buffer).
     fn energy(&mut self, step: usize) -> EnergySample {
         let (dt, u_prev, u) = (self.dt, &self.u_prev, &self.u);
-        let mass = self.body.lumped_mass();
         let ku = &mut self.ku;
         self.body.stiffness_times(u, ku, &mut self.work);
-        ku.par_chunks_mut(ENERGY_CHUNK)
-            .enumerate()
-            .for_each(|(c, chunk)| {
-                let r = c * ENERGY_CHUNK..c * ENERGY_CHUNK + chunk.len();
-                let (mut kinetic, mut strain) = (0.0, 0.0);
-                for (((&kui, &ui), &pi), &mi) in chunk
-                    .iter()
-                    .zip(&u[r.clone()])
-                    .zip(&u_prev[r.clone()])
-                    .zip(&mass[r])
-                {
-                    let v = (ui - pi) / dt;
-                    kinetic += mi * v * v;
-                    strain += pi * kui;
-                }
-                // DOFs come in pairs and the chunk size is even: every chunk has 2+ entries.
-                chunk[0] = kinetic;
-                chunk[1] = strain;
-            });
-        let (mut kinetic, mut strain) = (0.0, 0.0);
-        for chunk in ku.chunks(ENERGY_CHUNK) {
-            kinetic += chunk[0];
-            strain += chunk[1];
-        }
+        let state = (&u_prev[..], &u[..], self.body.lumped_mass());
+        let (kinetic, strain) = energy_sums(ku, state, dt, |k, kuk| u_prev[k] * kuk);
         EnergySample {
             time_s: (step as f64 - 0.5) * dt,
             kinetic_j: 0.5 * kinetic,

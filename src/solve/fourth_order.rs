@@ -24,7 +24,7 @@
 //! at 0.9 of the limit. An absorbing edge needs an implicit treatment of that term.
 
 use super::discretisation::Discretisation;
-use super::explicit::Coefficients;
+use super::explicit::{energy_sums, Coefficients};
 use super::ledger::Flows;
 use super::stepper::{EnergySample, Fields, Stepper, Velocity};
 use super::SampledSources;
@@ -34,7 +34,7 @@ use rayon::prelude::*;
 /// The largest stable step over central differences' dt_crit: sqrt(12) / 2.
 pub const STABILITY_GAIN: f64 = 1.732_050_807_568_877_2;
 
-/// DOFs per parallel task of the updates and energy sums.
+/// DOFs per parallel task of the updates.
 const CHUNK: usize = 8192;
 
 /// One source's modified force: DOF weights of w, and of q = K M^-1 w.
@@ -210,12 +210,7 @@ impl<D: Discretisation> Stepper for FourthOrder<'_, D> {
         let mut next = std::mem::take(&mut self.u_next);
         self.for_each_force(step, |d, f| next[d] += self.coef.a[d] * f);
         let (u_prev, u) = (&self.u_prev, &self.u);
-        for &(d, c, r) in &self.coef.dashpots {
-            let q = next[d] - 2.0 * u[d] + u_prev[d];
-            next[d] = (q + 2.0 * u[d] - (1.0 - r) * u_prev[d]) / (1.0 + r);
-            let du = next[d] - u_prev[d];
-            self.flows.dashpot_loss += c * du * du / (4.0 * self.dt);
-        }
+        self.flows.dashpot_loss += self.coef.damp(u_prev, u, &mut next, self.dt);
         let mut work = 0.0;
         self.for_each_force(step, |d, f| work += 0.5 * f * (next[d] - u_prev[d]));
         self.flows.source_work += work;
@@ -243,33 +238,15 @@ impl<D: Discretisation> Stepper for FourthOrder<'_, D> {
     }
 
     /// Energy at t_{n-1/2}: kinetic 1/2 v^T M v with v = (u_n - u_{n-1})/dt, strain
-    /// 1/2 u_{n-1}^T K~ u_n. Chunk sums added in order: independent of the thread count.
+    /// 1/2 u_{n-1}^T K~ u_n ([`super::explicit::energy_sums`]).
     fn energy(&mut self, step: usize) -> EnergySample {
         self.stiffness_products(step);
         let (dt, h) = (self.dt, self.dt * self.dt / 12.0);
-        let (u_prev, u, ku, kmku) = (&self.u_prev, &self.u, &self.ku, &self.kmku);
-        let mass = self.body.lumped_mass();
-        // u_next is free until the next advance: it holds each chunk's two sums.
-        self.u_next
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(c, chunk)| {
-                let r = c * CHUNK..c * CHUNK + chunk.len();
-                let (mut kinetic, mut strain) = (0.0, 0.0);
-                for k in r {
-                    let v = (u[k] - u_prev[k]) / dt;
-                    kinetic += mass[k] * v * v;
-                    strain += u_prev[k] * (ku[k] - h * kmku[k]);
-                }
-                // DOFs come in pairs and the chunk size is even: every chunk has 2+ entries.
-                chunk[0] = kinetic;
-                chunk[1] = strain;
-            });
-        let (mut kinetic, mut strain) = (0.0, 0.0);
-        for chunk in self.u_next.chunks(CHUNK) {
-            kinetic += chunk[0];
-            strain += chunk[1];
-        }
+        let (u_prev, ku, kmku) = (&self.u_prev, &self.ku, &self.kmku);
+        let state = (&u_prev[..], &self.u[..], self.body.lumped_mass());
+        // u_next is free until the next advance: it holds the chunk sums.
+        let strain = |k: usize, _| u_prev[k] * (ku[k] - h * kmku[k]);
+        let (kinetic, strain) = energy_sums(&mut self.u_next, state, dt, strain);
         EnergySample {
             time_s: (step as f64 - 0.5) * dt,
             kinetic_j: 0.5 * kinetic,

@@ -624,18 +624,12 @@ fn central_difference<D: Discretisation>(
     if config.integrator == Integrator::FourthOrder {
         return fourth_order(disc, body, dt_crit_s, (sources, receivers), config, setup);
     }
-    let dt = config.dt_s.unwrap_or(config.step_safety * dt_crit_s);
-    let ratio = dt / dt_crit_s;
-    if ratio > 1.0 && !config.force {
-        return Err(Error::StepTooLarge {
-            dt_s: dt,
-            dt_crit_s,
-            ratio,
-        });
-    }
-    let steps = run_steps(body, sources.len(), receivers.len(), config, dt)?;
-    let coef = Coefficients::new(disc, dt);
-    let forced = SampledSources::new(sources, dt, steps)?;
+    let Explicit {
+        dt,
+        steps,
+        coef,
+        forced,
+    } = Explicit::new(disc, body, dt_crit_s, (sources, receivers), config)?;
     let (u0, v0) = (
         config.initial_displacement.as_deref(),
         config.initial_velocity.as_deref(),
@@ -651,6 +645,42 @@ fn central_difference<D: Discretisation>(
             let stepper = CentralDifference::new(disc, coef, dt, forced, NoContact, u0, v0);
             finish_explicit(stepper, run)
         }
+    }
+}
+
+/// What both explicit schemes set up before stepping: the step (at most `dt_crit_s` unless
+/// forced), the number of steps, the per-DOF constants and the sampled sources.
+struct Explicit<'a> {
+    dt: f64,
+    steps: usize,
+    coef: Coefficients,
+    forced: SampledSources<'a>,
+}
+
+impl<'a> Explicit<'a> {
+    fn new<D: Discretisation>(
+        disc: &D,
+        body: BodyShape<'_>,
+        dt_crit_s: f64,
+        (sources, receivers): (&'a [Source], &[Receiver]),
+        config: &RunConfig,
+    ) -> Result<Explicit<'a>> {
+        let dt = config.dt_s.unwrap_or(config.step_safety * dt_crit_s);
+        let ratio = dt / dt_crit_s;
+        if ratio > 1.0 && !config.force {
+            return Err(Error::StepTooLarge {
+                dt_s: dt,
+                dt_crit_s,
+                ratio,
+            });
+        }
+        let steps = run_steps(body, sources.len(), receivers.len(), config, dt)?;
+        Ok(Explicit {
+            dt,
+            steps,
+            coef: Coefficients::new(disc, dt),
+            forced: SampledSources::new(sources, dt, steps)?,
+        })
     }
 }
 
@@ -680,18 +710,12 @@ fn fourth_order<D: Discretisation>(
         );
     }
     let dt_crit_s = fourth_order::STABILITY_GAIN * dt_crit_s;
-    let dt = config.dt_s.unwrap_or(config.step_safety * dt_crit_s);
-    let ratio = dt / dt_crit_s;
-    if ratio > 1.0 && !config.force {
-        return Err(Error::StepTooLarge {
-            dt_s: dt,
-            dt_crit_s,
-            ratio,
-        });
-    }
-    let steps = run_steps(body, sources.len(), receivers.len(), config, dt)?;
-    let coef = Coefficients::new(disc, dt);
-    let forced = SampledSources::new(sources, dt, steps)?;
+    let Explicit {
+        dt,
+        steps,
+        coef,
+        forced,
+    } = Explicit::new(disc, body, dt_crit_s, (sources, receivers), config)?;
     let (u0, v0) = (
         config.initial_displacement.as_deref(),
         config.initial_velocity.as_deref(),
