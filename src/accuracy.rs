@@ -44,7 +44,7 @@ pub enum Refinement {
     /// (order 1: the tail is d_1; at the slowest fall accepted, rho = 2^-0.5, it is 2.4 d_1).
     /// A faster fall between the lower orders overstates the fall at the top order (the error
     /// from the orders across and from the time step does not fall with the order along x),
-    /// so it gives the bound d_1; README "Error estimates on spectral elements" checks both
+    /// so it gives the bound d_1; docs/src/validation/default-experiment.md checks both
     /// against a converged reference.
     Orders,
 }

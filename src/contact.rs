@@ -1,5 +1,5 @@
 //! Node-to-node contact with Coulomb friction on a horizontal crack (report Sec. 4.9,
-//! Table 3 corrected: README, Physics notes).
+//! Table 3 corrected: docs/src/physics.md).
 //!
 //! With lumped mass the explicit predictor u* moves each crack DOF independently, and a
 //! contact force lambda changes the next displacement by D lambda with D = dt^2 / m (divided
@@ -21,7 +21,7 @@
 //!   With the instantaneous law, node-to-node friction on the GLL nodes of spectral elements
 //!   of order 3 and above flutters: the pairs chatter open and shut and the mean friction
 //!   falls short of mu N. A tau of the P-wave travel time over the mean node spacing along
-//!   the crack removes it (README "Friction at high order").
+//!   the crack removes it (docs/src/validation/spectral-elements.md, "Friction at high order").
 
 use crate::error::{Error, Result};
 use crate::mesh::Crack;

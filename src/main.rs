@@ -4,7 +4,9 @@ use clap::Parser;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
-use trnews::script::{parse_param_value, Host, HostOptions, ScriptError, DEFAULT_MAX_OPERATIONS};
+use trnews::script::{
+    parse_param_value, Host, HostOptions, ScriptError, DEFAULT_MAX_OPERATIONS, DEFAULT_OUT_DIR,
+};
 
 /// The heap, counted (live bytes and bytes allocated so far) so that the host can hold a
 /// script's memory to `--max-memory` and charge native work to `--max-operations`. No cap is
@@ -32,8 +34,9 @@ struct Cli {
     /// The script to run, e.g. scripts/sweep_delays.rhai.
     #[arg(required_unless_present_any = ["api", "definitions"])]
     script: Option<PathBuf>,
-    /// Directory that every output path of the script is resolved under.
-    #[arg(long, default_value = ".")]
+    /// Directory that every output path of the script is resolved under (`--out .` writes
+    /// the committed gallery under plots/).
+    #[arg(long, default_value = DEFAULT_OUT_DIR)]
     out: PathBuf,
     /// Directory that every data path the script reads (io::read_npy, read_csv, read_json) is resolved under (default: the script's directory).
     #[arg(long, value_name = "DIR")]
@@ -60,11 +63,12 @@ struct Cli {
     /// Only compile the script and report syntax errors.
     #[arg(long)]
     check: bool,
-    /// List every function the scripting API offers, with descriptions, and exit.
-    #[arg(long)]
-    api: bool,
+    /// List every function the scripting API offers, with descriptions, and exit; `--api
+    /// markdown` writes the book's script reference (docs/src/reference.md).
+    #[arg(long, value_name = "FORMAT", num_args = 0..=1, default_missing_value = "text")]
+    api: Option<ApiFormat>,
     /// Write Rhai definition files (.d.rhai) of the whole API into DIR, for editors with the
-    /// Rhai language server, and exit (see the README).
+    /// Rhai language server, and exit (see docs/src/guide/editor.md).
     #[arg(long, value_name = "DIR")]
     definitions: Option<PathBuf>,
     /// Compute only share I of N of every sweep's points, then stop (default inside a Slurm
@@ -75,6 +79,15 @@ struct Cli {
     /// naming missing or failed points.
     #[arg(long)]
     merge: bool,
+}
+
+/// How `--api` lists the API.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum ApiFormat {
+    /// Grouped by module, for a terminal.
+    Text,
+    /// The book's script reference page.
+    Markdown,
 }
 
 /// Splits `NAME=VALUE`.
@@ -166,9 +179,12 @@ fn run_in_pool(cli: &Cli) -> Result<(), ScriptError> {
         .map_err(|e| ScriptError::new("--shard", e))?,
         data_dir: cli.data.clone(),
     })?;
-    if cli.api {
-        print_api(&host);
-        return Ok(());
+    if let Some(format) = cli.api {
+        let listing = match format {
+            ApiFormat::Text => api_text(&host),
+            ApiFormat::Markdown => trnews::script::api_markdown(&host.api()),
+        };
+        return print_listing(&listing);
     }
     if let Some(dir) = &cli.definitions {
         let files = host.write_definitions(dir)?;
@@ -193,6 +209,12 @@ fn run_in_pool(cli: &Cli) -> Result<(), ScriptError> {
     }
     let start = Instant::now();
     host.run_file(script)?;
+    for name in host.unread_params() {
+        eprintln!(
+            "warning: --set {name}: {} never asks for a parameter of that name (misspelt?)",
+            script.display()
+        );
+    }
     if !cli.quiet {
         eprintln!(
             "{}: done in {:.2} s (outputs under {})",
@@ -204,14 +226,27 @@ fn run_in_pool(cli: &Cli) -> Result<(), ScriptError> {
     Ok(())
 }
 
-/// Prints the API grouped by module: signature, then its description indented.
-fn print_api(host: &Host) {
+/// The API grouped by module: signature, then its description indented.
+fn api_text(host: &Host) -> String {
+    let mut out = String::new();
     let mut module = String::new();
     for f in host.api() {
         if f.module != module {
-            println!("\n[{}]", f.module);
+            out.push_str(&format!("\n[{}]\n", f.module));
             module = f.module.clone();
         }
-        println!("  {}\n      {}", f.signature, f.description);
+        out.push_str(&format!("  {}\n      {}\n", f.signature, f.description));
+    }
+    out
+}
+
+/// Writes a listing to standard output; a reader that stops early (`| head`) is not an error.
+fn print_listing(text: &str) -> Result<(), ScriptError> {
+    use std::io::Write;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(ScriptError::new("--api", format!("cannot write the listing: {e}")))
+        }
+        _ => Ok(()),
     }
 }

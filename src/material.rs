@@ -1,6 +1,6 @@
 //! Linear elastic materials reduced to 2D (report Sec. 2.1, 4.5).
 //!
-//! The report's eqs 20-22 are not a valid plane-strain reduction (README, Physics notes). Here the
+//! The report's eqs 20-22 are not a valid plane-strain reduction (docs/src/physics.md). Here the
 //! plane matrix is built from the full 3D orthotropic compliance: plane stress keeps the
 //! in-plane block of the compliance, plane strain eliminates the out-of-plane strain
 //! `eps_33 = 0` by `S'_ij = S_ij - S_i3 S_j3 / S_33`. The result is inverted to the stiffness

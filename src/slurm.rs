@@ -29,7 +29,7 @@ pub struct SlurmArgs {
     #[arg(long, value_name = "C", default_value_t = 2)]
     cpus: usize,
     /// Output directory, on a file system every node sees (points, figures, logs).
-    #[arg(long, default_value = ".")]
+    #[arg(long, default_value = crate::script::DEFAULT_OUT_DIR)]
     out: PathBuf,
     /// Script parameter NAME=VALUE, passed to every run.
     #[arg(long = "set", value_name = "NAME=VALUE")]

@@ -1435,7 +1435,7 @@ fn hostile_name(g: &mut Gen) -> String {
 /// files of a stored sweep, and hostile script names given to `trnews-script slurm`. Each
 /// case is `Ok` (a point file recomputed, a batch file that runs the script by its name) or a
 /// one-line error at the script position, within the time budget; nothing runs from a name.
-/// `TRNEWS_FUZZ_SEED` and `TRNEWS_FUZZ_CASES` set the run (the README gives a longer one).
+/// `TRNEWS_FUZZ_SEED` and `TRNEWS_FUZZ_CASES` set the run (docs/src/guide/sandbox.md gives a longer one).
 #[test]
 fn fuzz_data_point_gmsh_files_and_slurm_names() {
     let seed: u64 = std::env::var("TRNEWS_FUZZ_SEED")

@@ -99,7 +99,7 @@ fn explicit_and_newmark_converge_at_second_order_and_agree() {
 #[test]
 fn closed_undamped_energy_is_constant_over_ten_thousand_steps() {
     // The energy conserved by lumped central difference is 1/2 v^T M v + 1/2 u_n^T K u_{n+1}
-    // (README, Physics notes): its drift is round-off, so 1e-6 relative over 1e4 steps is a loose bound.
+    // (docs/src/physics.md): its drift is round-off, so 1e-6 relative over 1e4 steps is a loose bound.
     let model = block(false);
     let u0: Vec<f64> = model
         .mesh

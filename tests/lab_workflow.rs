@@ -1,4 +1,4 @@
-//! The experiment scripts on lab data (README "Lab data"): `scripts/sweep_delays.rhai`,
+//! The experiment scripts on lab data (docs/src/guide/lab-data.md): `scripts/sweep_delays.rhai`,
 //! `trnews_focus.rhai` and `pulse_inversion.rhai` at the smoke resolution, each run
 //!
 //! - on recorded responses (`channel = recorded`): the script starts on an empty lab

@@ -501,7 +501,7 @@ impl SemPreset {
     /// elements with orders 2-3 across, paper order 6 on 0.25 mm with orders 3-6 across. The
     /// elements and orders along x were chosen on the default experiment, the floors across
     /// on the exact normal-incidence solution through the plies, where quick is 0.29% off and
-    /// paper 0.08% (README "The epoxy across the layers").
+    /// paper 0.08% (docs/src/validation/normal-incidence.md).
     pub fn of(resolution: Resolution) -> SemPreset {
         let (size, order_x, min_order_y, max_order_y) = match resolution {
             Resolution::Smoke | Resolution::Quick => (0.5e-3, 7, MIN_ORDER_Y_QUICK, 3),
@@ -520,8 +520,8 @@ impl SemPreset {
 /// The discretisation of a scene's layered rectangle. Both cut it along the same lines: columns
 /// of at most `element_size_x_m`, rows of at most `element_size_y_m` with every layer
 /// interface a row line. A spectral element spans `order` GLL intervals, so it wants about
-/// `order` times the element size of a T3 mesh of the same accuracy; see README "Spectral
-/// elements".
+/// `order` times the element size of a T3 mesh of the same accuracy (see
+/// docs/src/validation/spectral-elements.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "kind", deny_unknown_fields)]
 pub enum DiscretisationSpec {
@@ -639,8 +639,8 @@ impl SceneSpec {
     }
 
     /// The scene of a resolution preset on its default discretisation, the spectral
-    /// elements of [`SemPreset::of`] (they met the accuracy target on measurement; README
-    /// "Spectral elements").
+    /// elements of [`SemPreset::of`] (chosen on an exact solution through the plies:
+    /// docs/src/validation/normal-incidence.md).
     pub fn preset(resolution: Resolution) -> SceneSpec {
         SceneSpec::preset_on(resolution, DiscretisationKind::Sem)
     }

@@ -1,6 +1,6 @@
 //! `trnews::channel()`: the channel an experiment script runs on, read from its `--set`
 //! parameters in this one place, so that every experiment script takes the same ones
-//! (README "Lab data: measured and recorded channels"):
+//! (docs/src/guide/lab-data.md):
 //!
 //! - `channel = scene` (default): the script simulates its scenes; `channel()` gives ().
 //! - `channel = impulse`, `impulse = FILE.npy` (under `--data`; one row per receiver: the

@@ -31,7 +31,7 @@ pub use convert::{ScriptResult, WithPosition};
 
 use rhai::module_resolvers::DummyModuleResolver;
 use rhai::{Dynamic, Engine, EvalAltResult, Module, ParseError, Position, Scope, AST};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
 use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, RwLock};
@@ -61,6 +61,9 @@ const MODULES: &[(&str, ModuleBuilder)] = &[
 /// Default operation budget of a script run (`--max-operations`): script operations plus
 /// native work at one operation per KiB allocated (see [`crate::budget::check_script`]).
 pub const DEFAULT_MAX_OPERATIONS: u64 = 1_000_000_000;
+/// Default output directory of a script run (`--out`): git-ignored in this repository, so a
+/// run leaves a checkout clean; the committed gallery is written with `--out .`.
+pub const DEFAULT_OUT_DIR: &str = "out";
 /// Deepest script function call nesting allowed.
 pub const MAX_CALL_LEVELS: usize = 64;
 
@@ -92,7 +95,7 @@ pub struct HostOptions {
 impl Default for HostOptions {
     fn default() -> Self {
         HostOptions {
-            out_dir: PathBuf::from("."),
+            out_dir: PathBuf::from(DEFAULT_OUT_DIR),
             params: BTreeMap::new(),
             max_operations: DEFAULT_MAX_OPERATIONS,
             quiet: false,
@@ -157,6 +160,8 @@ pub struct HostContext {
     /// The input root of `io::read_*`: `--data`, or the running script's directory.
     data: RwLock<Option<crate::input::InputRoot>>,
     params: BTreeMap<String, Dynamic>,
+    /// The `--set` parameters the script has asked for, given or not (see [`Host::unread_params`]).
+    asked: RwLock<BTreeSet<String>>,
     quiet: bool,
     script: RwLock<String>,
     progress: RwLock<Option<indicatif::ProgressBar>>,
@@ -175,8 +180,13 @@ impl HostContext {
         &self.out_dir
     }
 
-    /// The `--set` value of parameter `name`, if given.
+    /// The `--set` value of parameter `name`, if given; the script has now asked for it.
     pub fn param(&self, name: &str) -> Option<&Dynamic> {
+        if let Ok(mut asked) = self.asked.write() {
+            if !asked.contains(name) {
+                asked.insert(name.to_string());
+            }
+        }
         self.params.get(name)
     }
 
@@ -360,6 +370,7 @@ impl Host {
             root: Some(root),
             data: RwLock::new(data),
             params: options.params,
+            asked: RwLock::new(BTreeSet::new()),
             quiet: options.quiet,
             script: RwLock::new(String::new()),
             progress: RwLock::new(None),
@@ -443,6 +454,19 @@ impl Host {
                 None => Err(self.render(name, &e)),
             },
         }
+    }
+
+    /// The `--set` parameters no script run by this host has asked for (with `param` or a
+    /// binding that reads parameters, such as `trnews::channel`): a misspelt name would
+    /// otherwise leave the script on its default without a word.
+    pub fn unread_params(&self) -> Vec<String> {
+        let asked = self.context.asked.read().map(|a| a.clone()).unwrap_or_default();
+        self.context
+            .params
+            .keys()
+            .filter(|name| !asked.contains(*name))
+            .cloned()
+            .collect()
     }
 
     /// The message of a shard that finished its share, when `err` is that stop.
@@ -688,6 +712,34 @@ fn api_listing(engine: &Engine) -> Vec<ApiFunction> {
                 out.push(api_function(module, f));
             }
         }
+    }
+    // the engine's metadata comes in hash order: sorted, the listing is the same every run
+    out.sort_by(|a, b| (&a.module, &a.signature).cmp(&(&b.module, &b.signature)));
+    out
+}
+
+/// The script reference of the book (`docs/src/reference.md`, `--api markdown`): every
+/// function grouped by module, its signature and description.
+pub fn api_markdown(functions: &[ApiFunction]) -> String {
+    let mut out = String::from(
+        "# Script reference\n\n\
+         Every function the scripting API offers, grouped by module, as `trnews-script --api` \
+         lists it. Generated: `cargo run --release -- --api markdown > docs/src/reference.md` \
+         (the test suite fails when this page and the API differ).\n",
+    );
+    let mut module = "";
+    for f in functions {
+        if f.module != module {
+            module = &f.module;
+            out.push_str(&format!("\n## {module}\n\n"));
+        }
+        // the description is prose from doc comments: angle brackets kept literal
+        let description = f.description.replace('<', "&lt;");
+        out.push_str(&format!("- `{}`", f.signature));
+        if !description.is_empty() {
+            out.push_str(&format!("<br>\n  {description}"));
+        }
+        out.push('\n');
     }
     out
 }

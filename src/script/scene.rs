@@ -142,14 +142,14 @@ mod scene_api {
         super::build(&ctx, overrides, SceneSpec::default())
     }
 
-    /// Builds a preset scene, "quick" (the default), "paper" or "smoke" (a small fast scene for tests), with `overrides`, on its default discretisation: spectral elements (quick and smoke: order 7 along x on 0.5 mm elements, orders 2-3 across; paper: order 6 on 0.25 mm, orders 3-6 across; README "Spectral elements"). `preset(name, "t3", overrides)` gives the report's triangles.
+    /// Builds a preset scene, "quick" (the default), "paper" or "smoke" (a small fast scene for tests), with `overrides`, on its default discretisation: spectral elements (quick and smoke: order 7 along x on 0.5 mm elements, orders 2-3 across; paper: order 6 on 0.25 mm, orders 3-6 across; docs/src/validation/spectral-elements.md). `preset(name, "t3", overrides)` gives the report's triangles.
     #[rhai_fn(return_raw)]
     pub fn preset(ctx: NativeCallContext, name: &str, overrides: Map) -> Res<SceneRef> {
         let base = SceneSpec::preset(name.parse().at(&ctx)?);
         super::build(&ctx, overrides, base)
     }
 
-    /// Builds a preset scene (as `preset(name, overrides)`) on the discretisation `kind`: "sem" (the default: spectral elements of the sizes and orders that go with the resolution; README "Spectral elements") or "t3" (the report's linear triangles: 60 x 40 um for quick, 20 x 10 um for paper, 80 x 40 um for smoke).
+    /// Builds a preset scene (as `preset(name, overrides)`) on the discretisation `kind`: "sem" (the default: spectral elements of the sizes and orders that go with the resolution; docs/src/validation/spectral-elements.md) or "t3" (the report's linear triangles: 60 x 40 um for quick, 20 x 10 um for paper, 80 x 40 um for smoke).
     #[rhai_fn(name = "preset", return_raw)]
     pub fn preset_on(
         ctx: NativeCallContext,

@@ -430,7 +430,7 @@ mod trnews_api {
         Responder::new(scene, duration_s).at(&ctx)
     }
 
-    /// The channel an experiment script runs on, from its `--set` parameters (the same for every script; README "Lab data"): `channel = scene` (default) gives () and the script simulates its scenes; `channel = impulse` (with impulse = FILE.npy under --data, one row per receiver, dt_s, peak_drive) gives a measured linear channel and `channel = recorded` (with recordings = DIR, a lab directory under --data, dt_s, peak_drive) a lab's recordings, each as #{kind, sample, responder}; `band` and `sample` label the data. On the recorded channel, drives not recorded yet are written to OUT/to_record/ and the run stops saying how to add them. A parameter that does not apply to the chosen channel is an error.
+    /// The channel an experiment script runs on, from its `--set` parameters (the same for every script; docs/src/guide/lab-data.md): `channel = scene` (default) gives () and the script simulates its scenes; `channel = impulse` (with impulse = FILE.npy under --data, one row per receiver, dt_s, peak_drive) gives a measured linear channel and `channel = recorded` (with recordings = DIR, a lab directory under --data, dt_s, peak_drive) a lab's recordings, each as #{kind, sample, responder}; `band` and `sample` label the data. On the recorded channel, drives not recorded yet are written to OUT/to_record/ and the run stops saying how to add them. A parameter that does not apply to the chosen channel is an error.
     #[rhai_fn(return_raw)]
     pub fn channel(ctx: NativeCallContext) -> Res<Dynamic> {
         crate::script::channel::from_params(&ctx)
