@@ -244,9 +244,10 @@ fn api_text(host: &Host) -> String {
 fn print_listing(text: &str) -> Result<(), ScriptError> {
     use std::io::Write;
     match std::io::stdout().lock().write_all(text.as_bytes()) {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
-            Err(ScriptError::new("--api", format!("cannot write the listing: {e}")))
-        }
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(ScriptError::new(
+            "--api",
+            format!("cannot write the listing: {e}"),
+        )),
         _ => Ok(()),
     }
 }

@@ -69,7 +69,11 @@ fn every_rhai_snippet_in_the_readme_and_the_book_runs() {
     let mut failures = Vec::new();
     for page in pages() {
         let text = std::fs::read_to_string(&page).expect("page readable");
-        let shown = page.strip_prefix(root()).unwrap_or(&page).display().to_string();
+        let shown = page
+            .strip_prefix(root())
+            .unwrap_or(&page)
+            .display()
+            .to_string();
         for (line, code) in rhai_snippets(&text) {
             let name = format!("{shown}:{line}");
             ran += 1;
@@ -82,12 +86,17 @@ fn every_rhai_snippet_in_the_readme_and_the_book_runs() {
         ran >= 3,
         "expected the README's and the guide's snippets, ran {ran}"
     );
-    assert!(failures.is_empty(), "snippets failed:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "snippets failed:\n{}",
+        failures.join("\n")
+    );
 }
 
 #[test]
 fn snippet_extraction_finds_code_and_its_line() {
-    let text = "# t\n\n```rhai\nlet a = 1;\nprint(a);\n```\ntext\n```sh\nls\n```\n```rhai\nx\n```\n";
+    let text =
+        "# t\n\n```rhai\nlet a = 1;\nprint(a);\n```\ntext\n```sh\nls\n```\n```rhai\nx\n```\n";
     let snippets = rhai_snippets(text);
     assert_eq!(
         snippets,

@@ -3,11 +3,12 @@
 //! conditions (Lysmer-Kuhlemeyer dashpots and viscous springs with GLL edge weights), the
 //! crack as split GLL nodes on a horizontal element edge, and the Lanczos step.
 
-use super::{
-    absorbing_edges, build_laminate, check_inside, check_mesh_size, edge_conditions,
-    held_and_pinned_dofs, is_periodic, place_crack, source_weights, transmitter_weights, Attach,
-    Body, CrackPlacement, Region, Scene, SceneSpec,
-};
+use super::build::{build_laminate, check_mesh_size, Region};
+use super::crack::{place_crack, CrackPlacement};
+use super::edges::{absorbing_edges, edge_conditions, held_and_pinned_dofs, is_periodic};
+use super::sources::{check_inside, source_weights, transmitter_weights, Attach};
+use super::spec::SceneSpec;
+use super::{Body, Scene};
 use crate::error::{require_positive, Error, Result};
 use crate::fem::AbsorbingEdge;
 use crate::mesh::{Crack, Grid, Mesh, Side};

@@ -460,7 +460,12 @@ impl Host {
     /// binding that reads parameters, such as `trnews::channel`): a misspelt name would
     /// otherwise leave the script on its default without a word.
     pub fn unread_params(&self) -> Vec<String> {
-        let asked = self.context.asked.read().map(|a| a.clone()).unwrap_or_default();
+        let asked = self
+            .context
+            .asked
+            .read()
+            .map(|a| a.clone())
+            .unwrap_or_default();
         self.context
             .params
             .keys()

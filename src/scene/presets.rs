@@ -1,0 +1,257 @@
+//! The resolution presets (smoke, quick, paper) on either discretisation, and the specs derived
+//! from a spec: its error-estimate companions, coarsened and crack-tied versions.
+
+use super::spec::{
+    CrackSpec, DiscretisationKind, DiscretisationSpec, GmshSpec, LaminateSpec, ReceiverSpec,
+    SceneSpec, TransmitterSpec,
+};
+use crate::accuracy::Refinement;
+use crate::contact::ContactOptions;
+use crate::error::{Error, Result};
+use crate::laminate::StochasticSpec;
+use serde::{Deserialize, Serialize};
+
+/// The resolution presets of the experiments: the scene ([`SceneSpec::preset`]) and the
+/// TR-NEWS timings ([`crate::trnews::TrNewsSpec::preset`]) that go with it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Resolution {
+    /// The report's scene on a mesh that runs in minutes (the default).
+    Quick,
+    /// The report's scene at the report's element size (20 um x 10 um; hours).
+    Paper,
+    /// A small, fast scene with short signals, for tests and CI.
+    Smoke,
+}
+
+impl std::str::FromStr for Resolution {
+    type Err = Error;
+
+    /// `quick`, `paper` or `smoke`; anything else is refused, naming the value.
+    fn from_str(name: &str) -> Result<Resolution> {
+        match name {
+            "quick" => Ok(Resolution::Quick),
+            "paper" => Ok(Resolution::Paper),
+            "smoke" => Ok(Resolution::Smoke),
+            other => Err(Error::invalid(
+                "resolution",
+                other,
+                "expected quick, paper or smoke",
+            )),
+        }
+    }
+}
+
+/// Lowest order across an element row at the quick (and smoke) resolution: the 20-60 um
+/// epoxy layers at order 2 (see [`SemPreset::of`]).
+const MIN_ORDER_Y_QUICK: usize = 2;
+/// Lowest order across an element row at the paper resolution: the epoxy at order 3.
+const MIN_ORDER_Y_PAPER: usize = 3;
+
+/// Spectral elements of a resolution preset: element sizes and the orders (along x, and the
+/// least and most across y).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SemPreset {
+    /// Element width (m).
+    pub element_size_x_m: f64,
+    /// Largest element height (m).
+    pub element_size_y_m: f64,
+    /// Polynomial order along x.
+    pub order_x: usize,
+    /// Lowest polynomial order across an element row.
+    pub min_order_y: usize,
+    /// Highest polynomial order across an element row.
+    pub max_order_y: usize,
+}
+
+impl SemPreset {
+    /// The spectral elements of each resolution: quick (and smoke) order 7 along x on 0.5 mm
+    /// elements with orders 2-3 across, paper order 6 on 0.25 mm with orders 3-6 across. The
+    /// elements and orders along x were chosen on the default experiment, the floors across
+    /// on the exact normal-incidence solution through the plies, where quick is 0.29% off and
+    /// paper 0.08% (docs/src/validation/normal-incidence.md).
+    pub fn of(resolution: Resolution) -> SemPreset {
+        let (size, order_x, min_order_y, max_order_y) = match resolution {
+            Resolution::Smoke | Resolution::Quick => (0.5e-3, 7, MIN_ORDER_Y_QUICK, 3),
+            Resolution::Paper => (0.25e-3, 6, MIN_ORDER_Y_PAPER, 6),
+        };
+        SemPreset {
+            element_size_x_m: size,
+            element_size_y_m: size,
+            order_x,
+            min_order_y,
+            max_order_y,
+        }
+    }
+}
+
+impl SceneSpec {
+    /// The default scene at the `paper` resolution: 20 um columns, 10 um rows (in a 1-D
+    /// model of the 50-pair stack, 10 um rows give ~0.3% error in the low-passed surface
+    /// response; the 2-D error is what the `accuracy` estimates measure).
+    pub fn paper() -> SceneSpec {
+        SceneSpec {
+            element_size_x_m: 20e-6,
+            element_size_y_m: 10e-6,
+            ..Default::default()
+        }
+    }
+
+    /// A small scene for smoke tests of scripts: 10 pairs (~2.4 mm), 6 mm wide, coarse mesh,
+    /// four receivers, a 1.2 mm crack 0.8 mm deep. Seconds per run, not physics-grade.
+    pub fn smoke() -> SceneSpec {
+        SceneSpec {
+            laminate: LaminateSpec::Stochastic(StochasticSpec {
+                pairs: 10,
+                ..Default::default()
+            }),
+            width_m: 6e-3,
+            element_size_x_m: 80e-6,
+            element_size_y_m: 40e-6,
+            transmitter: TransmitterSpec {
+                depth_top_m: 0.2e-3,
+                depth_bottom_m: 1.2e-3,
+                ..Default::default()
+            },
+            receivers: ReceiverSpec {
+                x_m: vec![1.5e-3, 2.5e-3, 3.5e-3, 4.5e-3],
+                ..Default::default()
+            },
+            crack: Some(CrackSpec {
+                depth_m: 0.8e-3,
+                x_center_m: Some(3e-3),
+                length_m: 1.2e-3,
+                ..Default::default()
+            }),
+            ..Default::default()
+        }
+    }
+
+    /// The scene of a resolution preset on its default discretisation, the spectral
+    /// elements of [`SemPreset::of`] (chosen on an exact solution through the plies:
+    /// docs/src/validation/normal-incidence.md).
+    pub fn preset(resolution: Resolution) -> SceneSpec {
+        SceneSpec::preset_on(resolution, DiscretisationKind::Sem)
+    }
+
+    /// The scene of a resolution preset on the discretisation `kind`: for T3 the scene's own
+    /// triangles ([`SceneSpec::default`], [`SceneSpec::paper`], [`SceneSpec::smoke`]); for
+    /// spectral elements the same scene with the element sizes and orders of
+    /// [`SemPreset::of`].
+    pub fn preset_on(resolution: Resolution, kind: DiscretisationKind) -> SceneSpec {
+        let t3 = match resolution {
+            Resolution::Quick => SceneSpec::default(),
+            Resolution::Paper => SceneSpec::paper(),
+            Resolution::Smoke => SceneSpec::smoke(),
+        };
+        match kind {
+            DiscretisationKind::T3 => t3,
+            DiscretisationKind::Sem => {
+                let p = SemPreset::of(resolution);
+                SceneSpec {
+                    element_size_x_m: p.element_size_x_m,
+                    element_size_y_m: p.element_size_y_m,
+                    discretisation: DiscretisationSpec::Sem {
+                        order_x: p.order_x,
+                        min_order_y: p.min_order_y,
+                        max_order_y: p.max_order_y,
+                    },
+                    ..t3
+                }
+            }
+        }
+    }
+
+    /// The two companions of an error estimate (the same laminate draw;
+    /// [`SceneSpec::refinement`]): on linear triangles the scene at 2x and 4x
+    /// the element sizes; on spectral elements the same elements at orders `order_x` - 1 and
+    /// `order_x` - 2 along x, at most that many across (a coarser element would leave the
+    /// asymptotic range at once: a halving of h changes an order-7 error by 2^14).
+    pub fn companions(&self) -> Result<[SceneSpec; 2]> {
+        match self.discretisation {
+            DiscretisationSpec::T3 => Ok([self.coarsened(2.0)?, self.coarsened(4.0)?]),
+            DiscretisationSpec::Sem {
+                order_x,
+                min_order_y,
+                max_order_y,
+            } => {
+                if order_x < 3 {
+                    return Err(Error::invalid(
+                        "discretisation.order_x",
+                        order_x,
+                        "error estimates on spectral elements compare orders p, p - 1 and \
+                         p - 2: they need order_x >= 3",
+                    ));
+                }
+                let lowered = |by: usize| SceneSpec {
+                    discretisation: DiscretisationSpec::Sem {
+                        order_x: order_x - by,
+                        min_order_y: min_order_y.min(order_x - by),
+                        max_order_y: max_order_y.min(order_x - by),
+                    },
+                    ..self.clone()
+                };
+                Ok([lowered(1), lowered(2)])
+            }
+        }
+    }
+
+    /// The contact options of the crack, as the spec gives them (None: no crack, an open
+    /// crack, or tied faces).
+    pub fn contact(&self) -> Option<ContactOptions> {
+        match &self.gmsh {
+            None => self
+                .crack
+                .as_ref()
+                .filter(|c| !c.tied)
+                .and_then(|c| c.contact),
+            Some(g) => g.crack_line.filter(|_| !g.tied).and(g.contact),
+        }
+    }
+
+    /// How [`SceneSpec::companions`] refine this scene.
+    pub fn refinement(&self) -> Refinement {
+        match self.discretisation {
+            DiscretisationSpec::T3 => Refinement::ElementSizes,
+            DiscretisationSpec::Sem { .. } => Refinement::Orders,
+        }
+    }
+
+    /// The same scene (same laminate draw) with element sizes multiplied by `factor`: the
+    /// companions of an error estimate on linear triangles and the pilots of a tolerance. A
+    /// Gmsh scene has no element sizes to change (its mesh is the file's): an error.
+    pub fn coarsened(&self, factor: f64) -> Result<SceneSpec> {
+        if let Some(g) = &self.gmsh {
+            return Err(Error::invalid(
+                "gmsh.path",
+                &g.path,
+                "error estimates and tolerances refine the layered scene's mesh; a Gmsh \
+                 scene's mesh is the file's (run without error_estimate or tolerance)",
+            ));
+        }
+        Ok(SceneSpec {
+            element_size_x_m: self.element_size_x_m * factor,
+            element_size_y_m: self.element_size_y_m * factor,
+            ..self.clone()
+        })
+    }
+
+    /// The uncracked companion: the same scene with the crack's faces tied. It has the same
+    /// mesh as the cracked scene (nodes, rows, columns; only the crack's duplicated nodes are
+    /// missing) and the same time step (see [`Scene::build`]), so that cracked-vs-uncracked
+    /// comparisons differ only by the crack. `crack: None` instead gives the laminate alone
+    /// with its own stability estimate.
+    pub fn uncracked(&self) -> SceneSpec {
+        SceneSpec {
+            crack: self.crack.as_ref().map(|c| CrackSpec {
+                tied: true,
+                ..c.clone()
+            }),
+            gmsh: self.gmsh.as_ref().map(|g| GmshSpec {
+                tied: true,
+                ..g.clone()
+            }),
+            ..self.clone()
+        }
+    }
+}
