@@ -896,6 +896,7 @@ mod tests {
             root: None,
             data: RwLock::new(None),
             params: BTreeMap::new(),
+            asked: RwLock::new(BTreeSet::new()),
             quiet: true,
             script: RwLock::new(String::new()),
             progress: RwLock::new(None),
