@@ -12,13 +12,13 @@
 //!
 //! `cargo run --release --example custom_loop`
 
-use trnews::contact::NoContact;
 use trnews::error::Result;
 use trnews::fem::Model;
 use trnews::laminate::Laminate;
 use trnews::material::{Material, Orthotropic, Plane};
 use trnews::mesh::Mesh;
 use trnews::sem::SemModel;
+use trnews::solve::NoContact;
 use trnews::solve::{
     CentralDifference, Coefficients, Discretisation, Fem, Fields, Observer, SampledSources, Stepper,
 };

@@ -11,13 +11,13 @@
 
 use std::f64::consts::PI;
 use std::time::Instant;
-use trnews::contact::NoContact;
 use trnews::exact::RollerMode;
 use trnews::fem::Model;
 use trnews::laminate::Laminate;
 use trnews::material::{Material, Orthotropic, Plane};
 use trnews::mesh::Mesh;
 use trnews::sem::SemModel;
+use trnews::solve::NoContact;
 use trnews::solve::{drive, CentralDifference, Coefficients, Discretisation, Fem, SampledSources};
 
 const WIDTH: f64 = 8e-3;

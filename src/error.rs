@@ -1,4 +1,6 @@
-//! The library's error type: every variant names the field, value or place that caused it.
+//! The library's error types: every variant names the field, value or place that caused it.
+
+use std::path::{Path, PathBuf};
 
 /// Everything that can go wrong while building or running a scene.
 #[derive(Debug, thiserror::Error)]
@@ -76,7 +78,7 @@ pub enum Error {
     Signal(#[from] crate::signal::SignalError),
     /// Writing an output file failed.
     #[error(transparent)]
-    Output(#[from] crate::io::OutputError),
+    Output(#[from] OutputError),
 }
 
 impl From<crate::budget::Stop> for Error {
@@ -141,5 +143,63 @@ pub fn require_finite(field: &str, value: f64) -> Result<f64> {
         Ok(value)
     } else {
         Err(Error::invalid(field, value, "must be finite"))
+    }
+}
+
+/// Failure to write an output file; every variant names the path and the cause.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// An operating-system call failed (`op` says which, e.g. "create directory").
+    #[error("cannot {op} {path}: {source}", path = .path.display())]
+    Io {
+        /// What was being done.
+        op: &'static str,
+        /// The file or directory concerned.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// The data handed to a writer is inconsistent (lengths, shapes, indices, values).
+    #[error("cannot write {path}: {message}", path = .path.display())]
+    Data {
+        /// The target file.
+        path: PathBuf,
+        /// What is wrong with the data.
+        message: String,
+    },
+    /// The path leads out of the active output root (given outside it, or through a symlink).
+    #[error("output path {path} leads outside the output directory {root} (through a symlink, or not under it); refused", path = .path.display(), root = .root.display())]
+    Outside {
+        /// The path as given.
+        path: PathBuf,
+        /// The output root.
+        root: PathBuf,
+    },
+    /// Serialising to JSON failed.
+    #[error("cannot write {path}: JSON serialisation failed: {source}", path = .path.display())]
+    Json {
+        /// The target file.
+        path: PathBuf,
+        /// The underlying error.
+        source: serde_json::Error,
+    },
+}
+
+impl OutputError {
+    /// Shorthand for an [`OutputError::Data`] about `path`.
+    pub(crate) fn data(path: &Path, message: impl Into<String>) -> Self {
+        OutputError::Data {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+
+    /// Shorthand for an [`OutputError::Io`] about `path`.
+    pub(crate) fn io(op: &'static str, path: &Path, source: std::io::Error) -> Self {
+        OutputError::Io {
+            op,
+            path: path.to_path_buf(),
+            source,
+        }
     }
 }

@@ -16,8 +16,8 @@
 //! start), both on the channel's step `dt_s`. A drive matches a recording when it has the
 //! same number of samples and a relative L2 difference of at most
 //! [`crate::trnews::RecordedChannel::MATCH`]. A drive on another step is first resampled to
-//! `dt_s` ([`Responder::respond`]); a drive of another length (even one zero-padded) never
-//! matches and is listed to record. A recording longer than asked for is cut; a shorter one
+//! `dt_s` ([`crate::trnews::Responder::respond`]); a drive of another length (even one
+//! zero-padded) never matches and is listed to record. A recording longer than asked for is cut; a shorter one
 //! is an error giving the length needed.
 
 use crate::error::{Error, Result};
@@ -25,13 +25,10 @@ use crate::error::{Error, Result};
 use crate::input::{InputError, InputRoot};
 use crate::io::OutputRoot;
 use crate::signal::Signal;
-#[cfg(feature = "io")]
-use crate::trnews::Recording;
-use crate::trnews::{Channel, Responder};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
+use std::sync::Mutex;
 
 /// The manifest of a lab directory: the recordings it holds.
 pub const LAB_MANIFEST: &str = "recordings.json";
@@ -125,6 +122,15 @@ fn read_drive(root: &InputRoot, rel: &str, dt_s: f64) -> Result<Signal> {
             ),
         )),
     }
+}
+
+/// One recorded transmission: the drive sent and what every receiver recorded.
+#[derive(Clone, Debug)]
+pub struct Recording {
+    /// The drive signal sent.
+    pub sent: Signal,
+    /// One trace per receiver, from t = 0 on the drive's step.
+    pub received: Vec<Signal>,
 }
 
 /// The recordings of the lab directory `dir` beneath `root`, on step `dt_s`: none when the
@@ -319,30 +325,4 @@ fn drive_id(drive: &Signal) -> String {
         .iter()
         .map(|b| format!("{b:02x}"))
         .collect()
-}
-
-/// The list of drives to record of a lab channel, `None` for any other responder.
-pub fn to_record_of(r: &Responder) -> Option<&Arc<ToRecord>> {
-    match r.channel() {
-        Channel::Recorded(c) => c.to_record.as_ref(),
-        _ => None,
-    }
-}
-
-/// A lab channel: the recordings of lab directory `dir` beneath `root` on step `dt_s`,
-/// answering every recorded drive and listing the others under `out_dir` (see [`ToRecord`]).
-#[cfg(feature = "io")]
-pub fn lab_channel(
-    root: &InputRoot,
-    dir: &str,
-    dt_s: f64,
-    peak_drive: f64,
-    band: String,
-    out: (&Path, Option<OutputRoot>),
-) -> Result<Responder> {
-    crate::error::require_positive("dt_s", dt_s)?;
-    let recordings = read_lab(root, dir, dt_s)?;
-    let shown = root.path().join(dir).display().to_string();
-    let to_record = Arc::new(ToRecord::new(out.0, out.1, &shown)?);
-    Responder::from_lab(recordings, dt_s, peak_drive, band, to_record)
 }

@@ -3,6 +3,7 @@
 use super::*;
 use serde::Serialize;
 use std::fs;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A fresh, empty directory under the system temp dir, removed on drop (the library's unit

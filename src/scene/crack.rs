@@ -125,11 +125,7 @@ pub(super) fn split_stability(
 }
 
 /// Crack line and tips (m) from its spec, checked against the domain.
-fn crack_geometry(
-    spec: &SceneSpec,
-    c: &CrackSpec,
-    height: f64,
-) -> Result<(f64, f64, f64)> {
+fn crack_geometry(spec: &SceneSpec, c: &CrackSpec, height: f64) -> Result<(f64, f64, f64)> {
     require_positive("crack.length_m", c.length_m)?;
     require_positive("crack.depth_m", c.depth_m)?;
     let middle = spec

@@ -162,12 +162,7 @@ pub(super) fn absorbing_edges(
 
 /// Distance from the transmitter's centre to the line of `side`; an error when the
 /// transmitter lies on that side (the springs' R must then be given).
-fn transmitter_distance(
-    side: Side,
-    source: [f64; 2],
-    width: f64,
-    height: f64,
-) -> Result<f64> {
+fn transmitter_distance(side: Side, source: [f64; 2], width: f64, height: f64) -> Result<f64> {
     let d = match side {
         Side::Left => source[0],
         Side::Right => width - source[0],

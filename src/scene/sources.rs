@@ -64,11 +64,7 @@ pub(super) fn transmitter_weights(
 }
 
 /// DOF weights of a traction `scale` * `direction` from per-node weights of a unit one.
-fn directed(
-    load: &[(usize, f64)],
-    direction: [f64; 2],
-    scale: f64,
-) -> Vec<(usize, f64)> {
+fn directed(load: &[(usize, f64)], direction: [f64; 2], scale: f64) -> Vec<(usize, f64)> {
     load.iter()
         .flat_map(|&(n, w)| {
             [

@@ -98,12 +98,7 @@ fn gmsh_mesh(spec: &SceneSpec, g: &GmshSpec) -> Result<Built> {
 /// The crack of a Gmsh scene: the nodes of physical line `group`, which must be a
 /// horizontal straight line of mesh nodes (every node of the mesh on its segment belongs to
 /// it; that its consecutive nodes are element edges is checked when it is inserted).
-fn gmsh_crack(
-    bytes: &[u8],
-    group: i32,
-    mesh: &Mesh,
-    tied: bool,
-) -> Result<CrackPlacement> {
+fn gmsh_crack(bytes: &[u8], group: i32, mesh: &Mesh, tied: bool) -> Result<CrackPlacement> {
     let points = crate::mesh::gmsh::read_physical_line(bytes, group)
         .map_err(|e| Error::invalid("gmsh.crack_line", group, e.to_string()))?;
     let y = points[0][1];

@@ -182,7 +182,7 @@ fn measured(ctx: &NativeCallContext, params: &Params, kind: Kind) -> ScriptResul
         }
         Kind::Recorded => {
             let out = (host.out_dir(), crate::io::active_root());
-            crate::lab::lab_channel(&root, &source, dt_s, peak_drive, band, out).at(ctx)?
+            crate::trnews::lab_channel(&root, &source, dt_s, peak_drive, band, out).at(ctx)?
         }
     };
     host.print(&describe(&responder, kind, &source));

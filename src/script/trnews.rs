@@ -225,7 +225,7 @@ fn delayed_sweep(
 ) -> ScriptResult<Vec<Delayed>> {
     use crate::script::WithPosition;
     use crate::sweep::{Key, PointSpec, Sweep};
-    if crate::lab::to_record_of(r).is_some() {
+    if crate::trnews::to_record_of(r).is_some() {
         // A lab's recordings are looked up, not simulated: every point at once, so that one
         // run lists every delayed drive still to record.
         return crate::trnews::delayed_tr_news(r, tr, focus, points, half_window_s).at(ctx);

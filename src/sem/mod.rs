@@ -18,6 +18,7 @@
 //! the originals. Viscous springs ([`SemModel::viscous_springs`]) add a diagonal stiffness.
 
 mod assembled;
+mod discretisation;
 mod even_odd;
 pub mod gll;
 mod layered;

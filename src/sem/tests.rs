@@ -48,7 +48,7 @@ fn integrate(m: &SemModel, dt: f64, steps: usize, u0: &[f64], u_minus: &[f64]) -
     let v0: Vec<f64> = u0.iter().zip(u_minus).map(|(a, b)| (a - b) / dt).collect();
     let sources = SampledSources::new(&[], dt, steps).expect("no sources");
     let coef = Coefficients::new(m, dt);
-    let contact = crate::contact::NoContact;
+    let contact = crate::solve::NoContact;
     let mut stepper = CentralDifference::new(m, coef, dt, sources, contact, Some(u0), Some(&v0));
     drive(&mut stepper, steps, &mut [], &mut |_| {}).expect("run");
     stepper.displacement().to_vec()

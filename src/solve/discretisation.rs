@@ -2,12 +2,11 @@
 //! the Lysmer-Kuhlemeyer dashpots, periodic ties, the stiffness applied to a vector, and the
 //! crack the contact law acts on (with the nodes' x for its traces). The
 //! steppers are generic over it, so linear triangles ([`Fem`]) and spectral elements
-//! ([`SemModel`]) run through the same loop.
+//! ([`crate::sem::SemModel`], which implements it beside its model) run through the same loop.
 
 use crate::error::Result;
 use crate::fem::{Model, StiffnessOperator};
 use crate::mesh::Crack;
-use crate::sem::{SemModel, SemWorkspace};
 use rayon::prelude::*;
 
 /// A semi-discrete elastic body M u'' + C u' + K u = f with diagonal M and C.
@@ -132,49 +131,5 @@ impl Discretisation for Fem<'_> {
         _: &mut (),
     ) {
         self.op.explicit_update(a, u_prev, u, u_next);
-    }
-}
-
-impl Discretisation for SemModel {
-    type Workspace = SemWorkspace;
-
-    fn lumped_mass(&self) -> &[f64] {
-        &self.lumped_mass
-    }
-    fn fixed_dofs(&self) -> &[usize] {
-        &self.fixed_dofs
-    }
-    fn dashpots(&self) -> &[(usize, f64)] {
-        &self.dashpots
-    }
-    fn periodic_ties(&self) -> &[(usize, usize)] {
-        &[]
-    }
-    fn workspace(&self) -> SemWorkspace {
-        SemModel::workspace(self)
-    }
-    fn node_x(&self, node: usize) -> f64 {
-        self.node_position(node)[0]
-    }
-    fn crack(&self) -> Option<&Crack> {
-        SemModel::crack(self)
-    }
-    fn check(&self) -> Result<()> {
-        SemModel::check(self)
-    }
-    fn stiffness_times(&self, u: &[f64], out: &mut [f64], work: &mut SemWorkspace) {
-        SemModel::stiffness_times(self, u, out, work);
-    }
-    /// The fused kernel: each node line of K u finished as it is gathered
-    /// ([`SemModel::explicit_update`]).
-    fn explicit_update(
-        &self,
-        a: &[f64],
-        u_prev: &[f64],
-        u: &[f64],
-        u_next: &mut [f64],
-        work: &mut SemWorkspace,
-    ) {
-        SemModel::explicit_update(self, a, u_prev, u, u_next, work);
     }
 }

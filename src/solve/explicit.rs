@@ -15,8 +15,8 @@
 use super::discretisation::Discretisation;
 use super::ledger::Flows;
 use super::stepper::{EnergySample, Fields, Stepper, Velocity};
+use super::ContactLaw;
 use super::SampledSources;
-use crate::contact::ContactLaw;
 use crate::error::Result;
 use rayon::prelude::*;
 

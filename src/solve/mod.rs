@@ -9,6 +9,7 @@
 //! [`run_central_difference_on`] the same for any discretisation, [`run_newmark_on`] for any
 //! assembled body ([`NewmarkBody`]: T3 or spectral elements).
 
+mod contact_law;
 pub mod discretisation;
 pub mod explicit;
 pub mod fourth_order;
@@ -19,13 +20,12 @@ pub mod progress;
 pub mod stability;
 pub mod stepper;
 
-use crate::contact::{
-    ContactLaw, ContactOptions, ContactReport, ContactSeries, ContactSolver, NoContact,
-};
+use crate::contact::{ContactOptions, ContactReport, ContactSeries, ContactSolver};
 use crate::error::{require_positive, Error, Result};
 use crate::fem::Model;
 use crate::mesh::{Crack, Mesh};
 use crate::signal::Signal;
+pub use contact_law::{ContactLaw, NoContact};
 pub use discretisation::{Discretisation, Fem};
 pub use explicit::{CentralDifference, Coefficients};
 pub use ledger::{EnergyLedger, Flows};

@@ -10,7 +10,6 @@ use super::stepper::{EnergySample, Fields, Stepper, Velocity};
 use super::SampledSources;
 use crate::error::{Error, Result};
 use crate::fem::{assemble_consistent_mass, BlockCsr, Model};
-use crate::sem::SemModel;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
@@ -78,24 +77,6 @@ impl<'a> NewmarkBody<'a> {
         Ok(NewmarkBody {
             stiffness: &model.stiffness,
             mass,
-            dashpots: &model.dashpots,
-            fixed_dofs: &model.fixed_dofs,
-        })
-    }
-
-    /// Spectral elements with their diagonal GLL mass, their dashpots and fixed DOFs, and
-    /// `stiffness` from [`SemModel::assemble_stiffness`] (refused when its size differs).
-    pub fn sem(model: &'a SemModel, stiffness: &'a BlockCsr) -> Result<Self> {
-        if 2 * stiffness.nodes() != model.dofs() {
-            return Err(Error::invalid(
-                "stiffness",
-                format!("{} DOFs", 2 * stiffness.nodes()),
-                format!("is not this model's ({} DOFs)", model.dofs()),
-            ));
-        }
-        Ok(NewmarkBody {
-            stiffness,
-            mass: Mass::Lumped(&model.lumped_mass),
             dashpots: &model.dashpots,
             fixed_dofs: &model.fixed_dofs,
         })
