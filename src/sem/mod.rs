@@ -18,6 +18,8 @@
 //! the originals. Viscous springs ([`SemModel::viscous_springs`]) add a diagonal stiffness.
 
 mod assembled;
+mod boundary;
+mod crack;
 mod discretisation;
 mod even_odd;
 pub mod gll;
@@ -26,9 +28,9 @@ mod layered;
 pub use layered::SemSpec;
 
 use crate::error::{Error, Result};
-use crate::fem::{VISCOUS_SPRING_ALPHA_N, VISCOUS_SPRING_ALPHA_T};
+
 use crate::material::Material;
-use crate::mesh::{Crack, CrackPair, Side};
+use crate::mesh::Crack;
 use even_odd::EvenOdd;
 use gll::Gll;
 use rayon::prelude::*;
@@ -317,117 +319,6 @@ impl SemModel {
     /// The crack, if one was split ([`SemModel::split_crack`]).
     pub fn crack(&self) -> Option<&Crack> {
         self.split.as_ref().map(|s| &s.crack)
-    }
-
-    /// Splits the node line of a horizontal crack at height `y_m` from `x0_m` to `x1_m`
-    /// (report Sec. 4.9 with split nodes): `y_m` must be an interior element row line and the
-    /// tips node columns (within 1e-9 of the rectangle's diagonal). Every node of the line
-    /// strictly between the tips gets a duplicate, appended after the existing nodes in x
-    /// order; a tip on the left or right edge is split too (a through-crack), an interior
-    /// tip stays shared. The original keeps the element row above (master, upper face), the
-    /// duplicate takes the row below (slave, lower face), each with its own side's mass.
-    /// A fixed DOF of a split node is fixed on both faces. Split before setting dashpots or
-    /// springs (their edge weights depend on the faces); one crack per model.
-    pub fn split_crack(&mut self, y_m: f64, x0_m: f64, x1_m: f64) -> Result<Crack> {
-        if self.split.is_some() {
-            return Err(Error::invalid(
-                "crack",
-                format!("y {y_m} m"),
-                "the model has a crack already (one per model)",
-            ));
-        }
-        if !(self.dashpots.is_empty() && self.springs.is_empty()) {
-            return Err(Error::invalid(
-                "crack",
-                format!("y {y_m} m"),
-                "split the crack before setting dashpots or springs (their weights depend on the faces)",
-            ));
-        }
-        let (width, height) = (
-            self.columns_m[self.columns_m.len() - 1] - self.columns_m[0],
-            self.rows_m[self.rows_m.len() - 1] - self.rows_m[0],
-        );
-        let tol = 1e-9 * width.hypot(height);
-        let n_rows = self.gll_y.len();
-        let row = (1..n_rows)
-            .find(|&k| (self.rows_m[k] - y_m).abs() <= tol)
-            .ok_or_else(|| {
-                Error::invalid(
-                    "crack.depth_m",
-                    format!("y {y_m} m"),
-                    format!(
-                        "must be an interior element row line (nearest: {} m)",
-                        nearest(&self.rows_m[1..n_rows], y_m)
-                    ),
-                )
-            })?;
-        if !(x0_m < x1_m) {
-            return Err(Error::invalid(
-                "crack.x0_m",
-                format!("{x0_m}..{x1_m} m"),
-                "needs finite tips x0 < x1",
-            ));
-        }
-        let column = |name: &str, x: f64| {
-            self.x_nodes_m
-                .iter()
-                .position(|&c| (c - x).abs() <= tol)
-                .ok_or_else(|| {
-                    Error::invalid(
-                        name,
-                        format!("{x} m"),
-                        format!(
-                            "must be a node column (nearest: {} m)",
-                            nearest(&self.x_nodes_m, x)
-                        ),
-                    )
-                })
-        };
-        let (i0, i1) = (column("crack.x0_m", x0_m)?, column("crack.x1_m", x1_m)?);
-        let last_column = self.nx() - 1;
-        let first = if i0 == 0 { 0 } else { i0 + 1 };
-        let last = if i1 == last_column { i1 } else { i1 - 1 };
-        if first > last {
-            return Err(Error::invalid(
-                "crack.x1_m",
-                format!("{x0_m}..{x1_m} m"),
-                "no node column lies strictly between the tips",
-            ));
-        }
-        let line = self.first_line[row];
-        let first_duplicate = self.grid_nodes();
-        let pairs = (first..=last)
-            .map(|i| CrackPair {
-                master: self.node(i, line),
-                slave: first_duplicate + i - first,
-            })
-            .collect();
-        let crack = Crack {
-            y_m: self.rows_m[row],
-            x0_m: self.x_nodes_m[i0],
-            x1_m: self.x_nodes_m[i1],
-            pairs,
-        };
-        let split = Split {
-            row_below: row - 1,
-            line,
-            first,
-            last,
-            first_duplicate,
-            crack: crack.clone(),
-        };
-        let held: Vec<usize> = split
-            .crack
-            .pairs
-            .iter()
-            .flat_map(|p| [(p.master, p.slave, 0), (p.master, p.slave, 1)])
-            .filter(|&(m, _, k)| self.fixed_dofs.contains(&(2 * m + k)))
-            .map(|(_, s, k)| 2 * s + k)
-            .collect();
-        self.fixed_dofs.extend(held);
-        self.split = Some(split);
-        self.lumped_mass = self.assemble_mass();
-        Ok(crack)
     }
 
     /// Checks that the fixed DOFs, dashpots and springs name DOFs of the model, and that the
@@ -872,132 +763,6 @@ impl SemModel {
         }
     }
 
-    /// GLL quadrature of a side: for every element edge on it, each of its nodes with the
-    /// weight w_a (h / 2) of its GLL point and the element row (or column) it belongs to,
-    /// so that sum weight f(node) = integral of f along the side for polynomials of degree
-    /// up to 2N - 1 per element. A side a through-crack ends on has its split node once per
-    /// face (the duplicate for the row below).
-    pub fn side_quadrature(&self, side: Side) -> Vec<(usize, f64, usize)> {
-        let mut out = Vec::new();
-        let (px, columns) = (self.gll_x.order(), self.columns_m.len() - 1);
-        match side {
-            Side::Bottom | Side::Top => {
-                let row = if side == Side::Bottom {
-                    0
-                } else {
-                    self.gll_y.len() - 1
-                };
-                let b = if side == Side::Bottom {
-                    0
-                } else {
-                    self.gll_y[row].order()
-                };
-                for c in 0..columns {
-                    let jx = 0.5 * (self.columns_m[c + 1] - self.columns_m[c]);
-                    for (a, w) in self.gll_x.weights.iter().enumerate() {
-                        out.push((self.element_node(row, c, a, b), w * jx, row));
-                    }
-                }
-            }
-            Side::Left | Side::Right => {
-                let (c, a) = if side == Side::Left {
-                    (0, 0)
-                } else {
-                    (columns - 1, px)
-                };
-                for (r, g) in self.gll_y.iter().enumerate() {
-                    let jy = 0.5 * (self.rows_m[r + 1] - self.rows_m[r]);
-                    for (b, w) in g.weights.iter().enumerate() {
-                        out.push((self.element_node(r, c, a, b), w * jy, r));
-                    }
-                }
-            }
-        }
-        out
-    }
-
-    /// Interpolation weights of the displacement at `(x_m, y_m)`: the element holding the
-    /// point (the lower one on a shared line), its local coordinates, and the tensor products
-    /// l_a(xi) l_b(eta) of the GLL Lagrange polynomials at its nodes, zeros dropped. A point on
-    /// a node gets that node alone with weight exactly 1 (on a crack line: the lower face's
-    /// node where the line is split). `None` outside the rectangle.
-    pub fn point_weights(&self, x_m: f64, y_m: f64) -> Option<Vec<(usize, f64)>> {
-        let c = containing(&self.columns_m, x_m)?;
-        let r = containing(&self.rows_m, y_m)?;
-        let local = |lines: &[f64], k: usize, v: f64| {
-            (2.0 * v - lines[k] - lines[k + 1]) / (lines[k + 1] - lines[k])
-        };
-        let lx = self.gll_x.lagrange_at(local(&self.columns_m, c, x_m));
-        let ly = self.gll_y[r].lagrange_at(local(&self.rows_m, r, y_m));
-        let mut weights = Vec::new();
-        for (b, wy) in ly.iter().enumerate() {
-            for (a, wx) in lx.iter().enumerate() {
-                let w = wx * wy;
-                if w != 0.0 {
-                    weights.push((self.element_node(r, c, a, b), w));
-                }
-            }
-        }
-        Some(weights)
-    }
-
-    /// Lysmer-Kuhlemeyer dashpots of the `sides` (report Sec. 4.6), with GLL
-    /// edge weights: per edge node, rho V_p times its weight on the normal DOF and rho V_s on
-    /// the tangential one, V_p along the side's normal, from the material of the element it
-    /// belongs to (a node shared by two element rows gets both halves). Sorted by DOF.
-    pub fn lysmer_dashpots(&self, sides: &[Side]) -> Vec<(usize, f64)> {
-        let mut c = std::collections::BTreeMap::<usize, f64>::new();
-        for &side in sides {
-            let normal = match side {
-                Side::Bottom | Side::Top => 1,
-                Side::Left | Side::Right => 0,
-            };
-            for (node, weight, row) in self.side_quadrature(side) {
-                let mat = &self.materials[self.row_material[row]];
-                let speeds = mat.wave_speeds();
-                let vp = if normal == 0 {
-                    speeds.p_x_m_s
-                } else {
-                    speeds.p_y_m_s
-                };
-                let rho = mat.density_kg_m3;
-                *c.entry(2 * node + normal).or_default() += rho * vp * weight;
-                *c.entry(2 * node + 1 - normal).or_default() += rho * speeds.s_m_s * weight;
-            }
-        }
-        c.into_iter().collect()
-    }
-
-    /// The springs of a viscous-spring edge on `side` (Liu et al. 2006, as T3's
-    /// [`crate::fem::AbsorbingEdge`]), with GLL edge weights: per edge node,
-    /// k_N = ALPHA_N G w / R on the normal DOF and k_T = ALPHA_T G w / R on the tangential one,
-    /// G = rho V_s^2 of the element the node's weight w comes from, R = `distance_m` from the
-    /// wave source (a node shared by two element rows gets both halves). Sorted by DOF; add
-    /// them to [`SemModel::springs`] (several sides: extend).
-    pub fn viscous_springs(&self, side: Side, distance_m: f64) -> Result<Vec<(usize, f64)>> {
-        if !(distance_m.is_finite() && distance_m > 0.0) {
-            return Err(Error::invalid(
-                "absorber.source_distance_m",
-                distance_m,
-                "must be a positive distance (m)",
-            ));
-        }
-        let normal = match side {
-            Side::Bottom | Side::Top => 1,
-            Side::Left | Side::Right => 0,
-        };
-        let mut k = std::collections::BTreeMap::<usize, f64>::new();
-        for (node, weight, row) in self.side_quadrature(side) {
-            let mat = &self.materials[self.row_material[row]];
-            let g = mat.density_kg_m3 * mat.wave_speeds().s_m_s.powi(2);
-            *k.entry(2 * node + normal).or_default() +=
-                VISCOUS_SPRING_ALPHA_N * g * weight / distance_m;
-            *k.entry(2 * node + 1 - normal).or_default() +=
-                VISCOUS_SPRING_ALPHA_T * g * weight / distance_m;
-        }
-        Ok(k.into_iter().collect())
-    }
-
     /// Largest eigenvalue of M^-1 K over the `free` DOFs (Lanczos, as for the T3 model), and
     /// the iterations used; dt_crit = 2 / sqrt of it. K is [`SemModel::stiffness_times`]'s:
     /// with the crack's faces apart and the springs; `free` has one entry per DOF.
@@ -1011,15 +776,6 @@ impl SemModel {
 
 /// Highest polynomial order offered (the GLL points are accurate to round-off well beyond).
 pub const MAX_ORDER: usize = 16;
-
-/// The entry of `values` nearest to `v`.
-fn nearest(values: &[f64], v: f64) -> f64 {
-    values
-        .iter()
-        .copied()
-        .min_by(|a, b| (a - v).abs().total_cmp(&(b - v).abs()))
-        .unwrap_or(f64::NAN)
-}
 
 /// The forces `f[a][component][lane]` of a full lane group into its node columns `group`
 /// (LANES elements of N - 1 columns, and the last one's right edge): the interior columns
@@ -1130,21 +886,6 @@ fn lane_groups(values: impl ExactSizeIterator<Item = f64>) -> Vec<Lanes> {
         groups[k / LANES][k % LANES] = v;
     }
     groups
-}
-
-/// Index of the interval of ascending `lines` holding `v` (the lower one on a shared line),
-/// or `None` outside [first, last].
-fn containing(lines: &[f64], v: f64) -> Option<usize> {
-    let (first, last) = (lines[0], *lines.last()?);
-    if !(first..=last).contains(&v) {
-        return None;
-    }
-    Some(
-        lines
-            .partition_point(|&l| l < v)
-            .saturating_sub(1)
-            .min(lines.len() - 2),
-    )
 }
 
 /// Node coordinates along one axis: each element's GLL points mapped onto it, shared end
