@@ -29,7 +29,10 @@ fn no_source_file_is_over_a_thousand_lines() {
     let long: Vec<String> = files
         .iter()
         .filter_map(|f| {
-            let lines = std::fs::read_to_string(f).expect("readable").lines().count();
+            let lines = std::fs::read_to_string(f)
+                .expect("readable")
+                .lines()
+                .count();
             (lines > MAX_LINES).then(|| format!("{} ({lines} lines)", f.display()))
         })
         .collect();
@@ -79,7 +82,7 @@ fn import_graph() -> BTreeMap<String, BTreeSet<String>> {
             continue;
         }
         let text = std::fs::read_to_string(&f).expect("readable");
-        let used = uses(&text).into_iter().filter(|m| *m != module);
+        let used: Vec<String> = uses(&text).into_iter().filter(|m| *m != module).collect();
         graph.entry(module).or_default().extend(used);
     }
     graph
@@ -102,7 +105,10 @@ fn reach(graph: &BTreeMap<String, BTreeSet<String>>, from: &str) -> BTreeSet<Str
 #[test]
 fn no_import_circles_between_modules() {
     let graph = import_graph();
-    assert!(graph.len() > 20, "expected the library's modules: {graph:?}");
+    assert!(
+        graph.len() > 20,
+        "expected the library's modules: {graph:?}"
+    );
     let circles: Vec<String> = graph
         .iter()
         .flat_map(|(a, used)| {
