@@ -30,12 +30,12 @@ pub struct TransducerSpec {
 }
 
 impl Default for TransducerSpec {
-    /// The chirp's band, 0.2-2 MHz (report Sec. 5.1), order 2: a broadband transducer
-    /// matched to the excitation.
+    /// The chirp's band, 0.2-2 MHz ([`signal::REPORT_BAND_HZ`]), order 2: a broadband
+    /// transducer matched to the excitation.
     fn default() -> Self {
         TransducerSpec {
-            f_lo_hz: 0.2e6,
-            f_hi_hz: 2e6,
+            f_lo_hz: signal::REPORT_BAND_HZ.0,
+            f_hi_hz: signal::REPORT_BAND_HZ.1,
             order: 2,
         }
     }

@@ -24,11 +24,15 @@ pub struct ChirpSpec {
     pub taper_fraction: f64,
 }
 
+/// The report's excitation band, 0.2 -> 2 MHz (Sec. 5.1): the default chirp's sweep and the
+/// default transducers' pass band.
+pub const REPORT_BAND_HZ: (f64, f64) = (0.2e6, 2e6);
+
 impl Default for ChirpSpec {
     fn default() -> Self {
         ChirpSpec {
-            f0_hz: 0.2e6,
-            f1_hz: 2e6,
+            f0_hz: REPORT_BAND_HZ.0,
+            f1_hz: REPORT_BAND_HZ.1,
             t1_s: 30e-6,
             total_s: 60e-6,
             taper_fraction: 0.0,

@@ -21,7 +21,7 @@ mod measure;
 mod resample;
 mod spectrum;
 
-pub use chirp::ChirpSpec;
+pub use chirp::{ChirpSpec, REPORT_BAND_HZ};
 pub use delay::{delay, delay_and_sum, time_reverse, time_reverse_to_start};
 pub use fft::{causal_response, convolve, convolve_discrete, xcorr};
 pub use filter::{butterworth, filtfilt, sosfilt, Biquad, FilterKind, Sos};
