@@ -14,6 +14,7 @@ use crate::laminate::Laminate;
 use crate::mesh::Mesh;
 use crate::sem::SemModel;
 use crate::signal::Signal;
+use crate::solve::time_dispersion::TimeDispersion;
 use crate::solve::{self, Receiver, RunConfig, RunOutput, StabilityEstimate};
 
 mod build;
@@ -33,7 +34,7 @@ use sources::build_receivers;
 pub use spec::{
     Absorber, CrackSpec, DiscretisationKind, DiscretisationSpec, EdgeCondition, EdgeConditions,
     GmshSpec, LaminateSpec, LayerSpec, MaterialSpec, ReceiverAt, ReceiverSpec, SceneSpec,
-    SourceSpec, TransmitterSpec,
+    SourceSpec, TimeDispersionSpec, TransmitterSpec,
 };
 use t3::build_t3;
 
@@ -183,14 +184,93 @@ impl Scene {
             8.0 * samples * (self.receivers.len() as f64 + 4.0),
             "shorten the run",
         )?;
-        let Some(t) = &self.spec.transducer else {
-            return self.apply_traction(drive, config);
+        let transducer = self.spec.transducer.as_ref();
+        let time_dispersion = self.time_dispersion(config, dt)?;
+        // the band-pass's ringing kept over the whole run, the margin included
+        let run_s = time_dispersion
+            .as_ref()
+            .map_or(config.duration_s, |td| td.extended(config).duration_s);
+        let traction = match transducer {
+            Some(t) => t.transmit(drive, run_s)?,
+            None => drive.clone(),
         };
-        let mut out = self.apply_traction(&t.transmit(drive, config.duration_s)?, config)?;
-        for trace in &mut out.traces {
-            *trace = t.receive(trace)?;
+        let mut out = match time_dispersion {
+            Some(td) => {
+                let longer = td.extended(config);
+                let mut out = self.apply_traction(&td.add_to_source(&traction)?, &longer)?;
+                self.remove_time_dispersion(&td, &mut out, config)?;
+                out
+            }
+            None => self.apply_traction(&traction, config)?,
+        };
+        if let Some(t) = transducer {
+            for trace in &mut out.traces {
+                *trace = t.receive(trace)?;
+            }
         }
         Ok(out)
+    }
+
+    /// The raw receiver quantities after a unit traction sample at t = 0 (the discrete
+    /// impulse response every linear transmission convolves with), with the time step's
+    /// error removed when the scene asks ([`SceneSpec::time_dispersion`]): convolving the
+    /// corrected response with a traction is the forward transform, the run and the inverse
+    /// transform in one.
+    pub fn impulse_response(&self, config: &RunConfig) -> Result<RunOutput> {
+        let dt = config.dt_s.unwrap_or(self.default_dt_s());
+        let unit = Signal {
+            dt_s: dt,
+            t0_s: 0.0,
+            samples: vec![1.0],
+        };
+        let Some(td) = self.time_dispersion(config, dt)? else {
+            return self.apply_traction(&unit, config);
+        };
+        let mut out = self.apply_traction(&unit, &td.extended(config))?;
+        self.remove_time_dispersion(&td, &mut out, config)?;
+        Ok(out)
+    }
+
+    /// The time-dispersion transforms of a run of this scene at step `dt`, when the scene
+    /// asks for them, the integrator's error is a frequency map and the step can cover the
+    /// band ([`TimeDispersionSpec`]); the run's report says which.
+    fn time_dispersion(&self, config: &RunConfig, dt: f64) -> Result<Option<TimeDispersion>> {
+        let Some(spec) = &self.spec.time_dispersion else {
+            return Ok(None);
+        };
+        if spec.up_to_hz >= TimeDispersion::band_limit_hz(dt) {
+            return Ok(None);
+        }
+        let field = "time_dispersion.up_to_hz";
+        if let Some(t) = &self.spec.transducer {
+            if spec.up_to_hz <= t.f_hi_hz {
+                return Err(Error::invalid(
+                    field,
+                    spec.up_to_hz,
+                    format!(
+                        "must be above the transducers' band (transducer.f_hi_hz = {:e} Hz)",
+                        t.f_hi_hz
+                    ),
+                ));
+            }
+        }
+        TimeDispersion::of_run(config.integrator, dt, spec.up_to_hz, field)
+    }
+
+    /// The inverse transform on every trace of `out` (a run extended by
+    /// [`TimeDispersion::extended`]), each cut back to the run `config` asked for; stated in
+    /// the report.
+    fn remove_time_dispersion(
+        &self,
+        td: &TimeDispersion,
+        out: &mut RunOutput,
+        config: &RunConfig,
+    ) -> Result<()> {
+        for (trace, receiver) in out.traces.iter_mut().zip(&self.receivers) {
+            *trace = td.cut_back(&td.remove_from_trace(trace, receiver.quantity)?, config);
+        }
+        out.report.time_dispersion_removed_up_to_hz = Some(td.up_to_hz());
+        Ok(())
     }
 
     /// Applies `traction` (Pa) on the transmitter segment and records the raw receiver

@@ -391,6 +391,9 @@ pub struct SceneSpec {
     /// [`crate::transducer`]); `None` transmits the drive signal as the traction and records
     /// the raw receiver quantity, as in the report.
     pub transducer: Option<TransducerSpec>,
+    /// Remove the time step's error from every recording ([`TimeDispersionSpec`], on by
+    /// default); `None` keeps it, as in the report.
+    pub time_dispersion: Option<TimeDispersionSpec>,
     /// The transmitter.
     pub transmitter: TransmitterSpec,
     /// Sources of the transmitted signal; when given, they replace the transmitter's segment
@@ -405,6 +408,32 @@ pub struct SceneSpec {
     /// How the layered rectangle is discretised: linear triangles (default) or spectral
     /// elements, on elements of `element_size_x_m` x at most `element_size_y_m` either way.
     pub discretisation: DiscretisationSpec,
+}
+
+/// The time-dispersion transforms of a scene's runs ([`crate::solve::time_dispersion`]):
+/// each transmission's traction gets the forward transform and each recording the inverse,
+/// so a recording holds no error of the time step on a linear scene (with contact, the
+/// linear part of it). Everything above `up_to_hz` is dropped from the recordings, and its
+/// top half rolled off. A run whose step cannot cover the band (dt above
+/// 0.9 / (pi up_to_hz), 14 ns at the default 20 MHz), or whose integrator's error is not a
+/// frequency map (the fourth-order step), keeps its step's error: its report's
+/// `time_dispersion_removed_up_to_hz` is empty.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TimeDispersionSpec {
+    /// The top of the band the transforms cover (Hz): above the transducers' band.
+    pub up_to_hz: f64,
+}
+
+impl Default for TimeDispersionSpec {
+    /// Ten times the top of the report's band, 20 MHz: where the transducer pair passes
+    /// (2 / 20)^4 = 1e-4 of a signal and the chirp almost nothing
+    /// (docs/src/validation/time-dispersion.md).
+    fn default() -> Self {
+        TimeDispersionSpec {
+            up_to_hz: 10.0 * crate::signal::REPORT_BAND_HZ.1,
+        }
+    }
 }
 
 /// The discretisations the experiments choose by name (`--set discretisation=t3|sem`).
@@ -502,6 +531,7 @@ impl Default for SceneSpec {
             },
             fix_bottom_corners: false,
             transducer: Some(TransducerSpec::default()),
+            time_dispersion: Some(TimeDispersionSpec::default()),
             transmitter: TransmitterSpec::default(),
             sources: vec![],
             receivers: ReceiverSpec::default(),

@@ -20,6 +20,7 @@ mod hilbert;
 mod measure;
 mod resample;
 mod spectrum;
+mod warp;
 
 pub use chirp::{ChirpSpec, REPORT_BAND_HZ};
 pub use delay::{delay, delay_and_sum, time_reverse, time_reverse_to_start};
@@ -29,6 +30,7 @@ pub use hilbert::{analytic, envelope, instantaneous_frequency};
 pub use measure::{peak, relative_l2, side_lobes, Peak, SideLobes};
 pub use resample::resample;
 pub use spectrum::{periodogram, welch, Detrend, Spectrum, Window};
+pub use warp::{smooth_step, warp_spectrum, ROLL_OFF_PERIODS};
 
 /// Relative tolerance on equality of two sample intervals.
 pub const DT_REL_TOL: f64 = 1e-9;
@@ -90,6 +92,9 @@ pub enum SignalError {
     /// An output would not fit in the memory limit (see [`crate::budget::check_memory`]).
     #[error("{0}")]
     OverMemory(String),
+    /// The work was stopped: Ctrl-C or the time limit (see [`crate::budget::check`]).
+    #[error("{0}")]
+    Stopped(crate::budget::Stop),
     /// Two parallel inputs have different lengths.
     #[error("length mismatch: {name_a} has {len_a} entries vs {name_b} has {len_b}")]
     LengthMismatch {

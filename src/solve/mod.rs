@@ -20,6 +20,7 @@ mod placement;
 pub mod progress;
 pub mod stability;
 pub mod stepper;
+pub mod time_dispersion;
 
 use crate::contact::{ContactOptions, ContactReport, ContactSeries, ContactSolver};
 use crate::error::{require_positive, Error, Result};
@@ -202,6 +203,9 @@ pub struct RunReport {
     pub source_work_j: f64,
     /// Contact diagnostics, when contact was active.
     pub contact: Option<ContactReport>,
+    /// The top of the band (Hz) over which the traces' time step error was removed
+    /// ([`time_dispersion`]); `None`: the traces carry it.
+    pub time_dispersion_removed_up_to_hz: Option<f64>,
 }
 
 /// Displacement of the crack faces at every step.
@@ -366,7 +370,7 @@ fn run_steps(
             "the time step is not a finite positive number (dt_crit not finite: check the materials' densities and moduli)",
         ));
     }
-    let steps = (config.duration_s / dt).round().max(1.0);
+    let steps = step_count(config.duration_s, dt) as f64;
     let crack_pairs = body.crack.map_or(0, |c| c.pairs.len()) as f64;
     let per_step = 8.0
         * (sources as f64
@@ -401,6 +405,11 @@ fn run_steps(
         ));
     }
     Ok(steps as usize)
+}
+
+/// The steps of a run of `duration_s` at `dt` (at least one): the samples of its traces.
+pub fn step_count(duration_s: f64, dt: f64) -> usize {
+    (duration_s / dt).round().max(1.0) as usize
 }
 
 /// The sources with their signals evaluated at every solver step t_n = n dt, n < steps
@@ -555,6 +564,7 @@ fn report(
         energy_residual_peak: ledger.peak_residual(),
         source_work_j: ledger.source_work_j.last().copied().unwrap_or(0.0),
         contact: None,
+        time_dispersion_removed_up_to_hz: None,
     }
 }
 

@@ -216,11 +216,6 @@ impl Responder {
         require_positive("dt_s", dt_s)?;
         let mut impulse = None;
         if scene.is_linear() {
-            let unit = Signal {
-                dt_s,
-                t0_s: 0.0,
-                samples: vec![1.0],
-            };
             let config = crate::solve::RunConfig {
                 dt_s: Some(dt_s),
                 ..scene.run_config(duration_s)
@@ -235,7 +230,7 @@ impl Responder {
                 &inputs,
                 &expect,
                 || {
-                    let out = scene.apply_traction(&unit, &config)?;
+                    let out = scene.impulse_response(&config)?;
                     Ok(Response {
                         traces: out.traces,
                         report: Some(out.report),
