@@ -152,6 +152,31 @@ fn fourth_order_gets_none_and_a_band_above_the_step_limit_is_refused() {
     );
 }
 
+/// A scene's band that is not a positive frequency is refused naming the field and value,
+/// at the first transmission; one the step cannot cover leaves the step's error, as the
+/// report says.
+#[test]
+fn a_scene_refuses_a_bad_band_and_states_an_uncovered_one() {
+    let transmit = |up_to_hz: f64| {
+        let spec = SceneSpec {
+            crack: None,
+            time_dispersion: Some(TimeDispersionSpec { up_to_hz }),
+            ..SceneSpec::preset(Resolution::Smoke)
+        };
+        let scene = Scene::build(&spec).unwrap();
+        let drive = trnews::signal::ChirpSpec::default()
+            .signal(scene.default_dt_s(), 1e3)
+            .unwrap();
+        scene.transmit(&drive, &scene.run_config(2e-6))
+    };
+    for bad in [f64::INFINITY, f64::NAN, -1.0, 1e6] {
+        let e = transmit(bad).unwrap_err().to_string();
+        assert!(e.contains("time_dispersion.up_to_hz"), "{bad}: {e}");
+    }
+    let out = transmit(1e12).unwrap();
+    assert_eq!(out.report.time_dispersion_removed_up_to_hz, None);
+}
+
 /// The smoke scene without its crack or transducers, through `Scene::transmit` (forward
 /// transform, run over the margin, inverse transform, cut back): the chirp's raw response at
 /// 0.9 dt_crit against every third sample of the same at 0.3 dt_crit. With the step's error

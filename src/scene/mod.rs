@@ -238,10 +238,17 @@ impl Scene {
         let Some(spec) = &self.spec.time_dispersion else {
             return Ok(None);
         };
+        let field = "time_dispersion.up_to_hz";
+        if !(spec.up_to_hz.is_finite() && spec.up_to_hz > 0.0) {
+            return Err(Error::invalid(
+                field,
+                spec.up_to_hz,
+                "must be a positive frequency (Hz)",
+            ));
+        }
         if spec.up_to_hz >= TimeDispersion::band_limit_hz(dt) {
             return Ok(None);
         }
-        let field = "time_dispersion.up_to_hz";
         if let Some(t) = &self.spec.transducer {
             if spec.up_to_hz <= t.f_hi_hz {
                 return Err(Error::invalid(
