@@ -62,14 +62,6 @@ fn recorded(
     (trace, out.report.energy_residual_peak)
 }
 
-/// Relative L2 distance of `a` to `reference`, sampled at `a`'s times (both traces start at
-/// t = 0 and `reference`'s step divides `a`'s).
-fn distance(a: &Signal, reference: &Signal) -> f64 {
-    let k = (a.dt_s / reference.dt_s).round() as usize;
-    let b: Vec<f64> = (0..a.len()).map(|i| reference.samples[i * k]).collect();
-    rel_l2(&a.samples, &b)
-}
-
 /// The critical step of central differences on the epoxy strip with a fixed bottom.
 fn dt_crit() -> f64 {
     sem_strip(&[(epoxy(), 3e-3)], 6, BottomEdge::Fixed).dt_crit()
@@ -94,7 +86,7 @@ fn fourth_order_in_time_on_a_closed_strip() {
         ] {
             let errors: Vec<f64> = [base, base / 2.0]
                 .iter()
-                .map(|&dt| distance(&run(integrator, dt), &reference))
+                .map(|&dt| rel_l2_on_coarser(&run(integrator, dt), &reference))
                 .collect();
             let observed = (errors[0] / errors[1]).log2();
             println!(
@@ -105,8 +97,8 @@ fn fourth_order_in_time_on_a_closed_strip() {
                 "{quantity:?}, {integrator:?}: {observed}"
             );
         }
-        let e4 = distance(&run(Integrator::FourthOrder, 2.25 * base), &reference);
-        let e2 = distance(&run(Integrator::Explicit, 2.25 * base / 4.0), &reference);
+        let e4 = rel_l2_on_coarser(&run(Integrator::FourthOrder, 2.25 * base), &reference);
+        let e2 = rel_l2_on_coarser(&run(Integrator::Explicit, 2.25 * base / 4.0), &reference);
         println!("{quantity:?}: fourth order at 0.9 dt_crit {e4:.3e}; central differences at 0.225 dt_crit {e2:.3e}");
         assert!(e4 < e2, "{quantity:?}: {e4} vs {e2}");
     }

@@ -56,7 +56,6 @@ fn recorded(
         duration_s: DURATION,
         dt_s: Some(dt),
         integrator,
-        force: matches!(integrator, Integrator::Newmark { .. }),
         ..Default::default()
     };
     let Some(td) = transforms else {
@@ -68,14 +67,6 @@ fn recorded(
         .unwrap();
     let trace = td.remove_from_trace(&out.traces[0], quantity).unwrap();
     td.cut_back(&trace, &config)
-}
-
-/// Relative L2 distance of `a` to `reference`, sampled at `a`'s times (both start at t = 0
-/// and `reference`'s step divides `a`'s).
-fn distance(a: &Signal, reference: &Signal) -> f64 {
-    let k = (a.dt_s / reference.dt_s).round() as usize;
-    let b: Vec<f64> = (0..a.len()).map(|i| reference.samples[i * k]).collect();
-    rel_l2(&a.samples, &b)
 }
 
 /// Central differences at 0.9 dt_crit and Newmark (lumped mass, average acceleration) at
@@ -104,11 +95,11 @@ fn central_differences_and_newmark_lose_their_step_error() {
             (Integrator::Explicit, 0.9 * dt_crit),
             (newmark, 1.8 * dt_crit),
         ] {
-            let kept = distance(
+            let kept = rel_l2_on_coarser(
                 &recorded(&strip, integrator, dt, quantity, None),
                 &reference,
             );
-            let removed = distance(
+            let removed = rel_l2_on_coarser(
                 &recorded(&strip, integrator, dt, quantity, up_to),
                 &reference,
             );
@@ -216,13 +207,10 @@ fn a_scene_removes_the_step_error_in_both_paths() {
     let (coarse, scene, config, drive) = response(on, 1);
     let (kept, _, _, _) = response(None, 1);
     let (kept_fine, _, _, _) = response(None, 3);
-    // every third sample of a run at a third of the step
-    let thinned = |s: &Signal| -> Vec<f64> { s.samples.iter().step_by(3).copied().collect() };
     let mut worst_removed: f64 = 0.0;
     for r in 0..scene.receivers.len() {
-        let n = coarse.traces[r].len();
-        let removed = rel_l2(&coarse.traces[r].samples, &thinned(&fine.traces[r])[..n]);
-        let kept = rel_l2(&kept.traces[r].samples, &thinned(&kept_fine.traces[r])[..n]);
+        let removed = rel_l2_on_coarser(&coarse.traces[r], &fine.traces[r]);
+        let kept = rel_l2_on_coarser(&kept.traces[r], &kept_fine.traces[r]);
         println!(
             "receiver {r}: 0.9 vs 0.3 dt_crit, step error removed {removed:.3e}, kept {kept:.3e}"
         );

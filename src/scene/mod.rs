@@ -186,18 +186,15 @@ impl Scene {
         )?;
         let transducer = self.spec.transducer.as_ref();
         let time_dispersion = self.time_dispersion(config, dt)?;
+        let run = time_dispersion.map_or_else(|| config.clone(), |td| td.extended(config));
         // the band-pass's ringing kept over the whole run, the margin included
-        let run_s = time_dispersion
-            .as_ref()
-            .map_or(config.duration_s, |td| td.extended(config).duration_s);
         let traction = match transducer {
-            Some(t) => t.transmit(drive, run_s)?,
+            Some(t) => t.transmit(drive, run.duration_s)?,
             None => drive.clone(),
         };
         let mut out = match time_dispersion {
             Some(td) => {
-                let longer = td.extended(config);
-                let mut out = self.apply_traction(&td.add_to_source(&traction)?, &longer)?;
+                let mut out = self.apply_traction(&td.add_to_source(&traction)?, &run)?;
                 self.remove_time_dispersion(&td, &mut out, config)?;
                 out
             }

@@ -21,7 +21,8 @@ use super::{check_alloc_with, fft_bytes, positive_finite, Signal, SignalError};
 ///
 /// Written by hand rather than with a non-uniform FFT: X is needed at a few thousand
 /// frequencies, and the direct sum (a phasor recurrence, O(samples x bins)) is exact to
-/// round-off, runs one bin per task, and costs a fraction of a second on a run's traces.
+/// round-off and runs one bin per task: a fraction of a second per trace of the default
+/// experiment, but quadratic in a record's length (tens of seconds for 1 ms records).
 pub fn warp_spectrum(
     x: &Signal,
     up_to_hz: f64,

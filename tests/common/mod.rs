@@ -128,6 +128,14 @@ pub fn rel_l2(a: &[f64], b: &[f64]) -> f64 {
     (num / den).sqrt()
 }
 
+/// Relative L2 distance of `a` to `reference` sampled at `a`'s times: both start at t = 0 and
+/// `reference`'s step divides `a`'s (a run against the same at a step k times smaller).
+pub fn rel_l2_on_coarser(a: &Signal, reference: &Signal) -> f64 {
+    let k = (a.dt_s / reference.dt_s).round() as usize;
+    let b: Vec<f64> = (0..a.len()).map(|i| reference.samples[i * k]).collect();
+    rel_l2(&a.samples, &b)
+}
+
 /// A fresh, empty directory under the system temp dir, removed on drop; unique per process
 /// and call.
 pub struct TempDir(pub PathBuf);
