@@ -271,7 +271,7 @@ fn sem_companions_lower_the_order_and_keep_the_elements() {
         assert_eq!(c, same_otherwise);
         c.discretisation
     });
-    let expected = [(6, 3), (5, 3)].map(|(order_x, max_order_y)| DiscretisationSpec::Sem {
+    let expected = [(6, 4), (5, 4)].map(|(order_x, max_order_y)| DiscretisationSpec::Sem {
         order_x,
         min_order_y: SemPreset::of(Resolution::Quick).min_order_y,
         max_order_y,

@@ -142,7 +142,7 @@ mod scene_api {
         super::build(&ctx, overrides, SceneSpec::default())
     }
 
-    /// Builds a preset scene, "quick" (the default), "paper" or "smoke" (a small fast scene for tests), with `overrides`, on its default discretisation: spectral elements (quick and smoke: order 7 along x on 0.5 mm elements, orders 2-3 across; paper: order 6 on 0.25 mm, orders 3-6 across; docs/src/validation/spectral-elements.md). `preset(name, "t3", overrides)` gives the report's triangles.
+    /// Builds a preset scene, "quick" (the default), "paper" or "smoke" (a small fast scene for tests), with `overrides`, on its default discretisation: spectral elements (quick and smoke: order 7 along x on 0.5 mm elements, orders 2-4 across; paper: order 6 on 0.25 mm, orders 3-6 across; docs/src/validation/spectral-elements.md). `preset(name, "t3", overrides)` gives the report's triangles.
     #[rhai_fn(return_raw)]
     pub fn preset(ctx: NativeCallContext, name: &str, overrides: Map) -> Res<SceneRef> {
         let base = SceneSpec::preset(name.parse().at(&ctx)?);
