@@ -74,7 +74,8 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         "{table}"
     );
     // Estimate columns are always written; "off" when the estimate was not asked for (at
-    // smoke resolution the coarse companions cost ~22% extra, above "auto"'s 15%).
+    // smoke resolution the spectral elements' companions cost about 1.2x the main runs, above
+    // "auto"'s 30%).
     let focus = std::fs::read_to_string(out.join("plots/trnews_focus.csv")).unwrap();
     assert!(
         focus.lines().next().unwrap().contains("focused_verdict"),

@@ -9,7 +9,7 @@
 //! band on transmission and reception, against the exact velocity by the relative L2 error
 //! over 30 us. Every run removes the time step's error as a scene does (the time-dispersion
 //! transforms, `trnews::solve::time_dispersion`). A resolved spectral-element strip agrees
-//! with the exact solution to 0.0004%; the presets' spectral elements are 0.008% (quick) and
+//! with the exact solution to 0.0004%; the presets' spectral elements are 0.007% (quick) and
 //! 0.002% (paper) off. With the step's error kept they are 0.29% and 0.08% off, and they were
 //! 3.4% and 2.1% off while the order-across rule gave each thin epoxy layer one linear
 //! interval.

@@ -352,3 +352,47 @@ fn newmark_and_central_differences_agree_at_second_order_on_a_sem_scene() {
     let e = cracked.transmit(&drive, &config).unwrap_err().to_string();
     assert!(e.contains("integrator") && e.contains("contact"), "{e}");
 }
+
+/// The estimate's policy: off gives no companions, on gives both, "auto" gives them where they
+/// cost at most `AUTO_ESTIMATE_MAX_COST` of the main runs and otherwise states their cost:
+/// the spectral elements' companions (orders p - 1 and p - 2 on the same elements) cost about
+/// as much as the main run, the smoke T3 mesh's (2h, 4h) a fraction of it. Building them runs
+/// no simulation.
+#[test]
+fn auto_turns_the_estimate_on_where_the_companions_are_cheap() {
+    use trnews::scene::{DiscretisationKind, Resolution};
+    use trnews::trnews::{ErrorEstimate, EstimateDecision, AUTO_ESTIMATE_MAX_COST};
+    let responder = |kind| {
+        let spec = SceneSpec::preset_on(Resolution::Smoke, kind);
+        Responder::simulating(Arc::new(Scene::build(&spec).unwrap()))
+    };
+    let (sem, t3) = (
+        responder(DiscretisationKind::Sem),
+        responder(DiscretisationKind::T3),
+    );
+    assert!(matches!(
+        sem.estimate_decision(ErrorEstimate::Off).unwrap(),
+        EstimateDecision::Off
+    ));
+    match sem.estimate_decision(ErrorEstimate::On).unwrap() {
+        EstimateDecision::On(scenes) => assert_eq!(scenes.len(), 2),
+        other => panic!("{other:?}"),
+    }
+    let sem_cost = sem.companion_scenes().unwrap().1;
+    match sem.estimate_decision(ErrorEstimate::Auto).unwrap() {
+        EstimateDecision::TooCostly { cost } => {
+            assert_eq!(cost, sem_cost);
+            assert!(cost > AUTO_ESTIMATE_MAX_COST);
+        }
+        other => panic!("{other:?}"),
+    }
+    let t3_cost = t3.companion_scenes().unwrap().1;
+    assert!(
+        t3_cost <= AUTO_ESTIMATE_MAX_COST,
+        "T3 smoke companions cost {t3_cost}"
+    );
+    assert!(matches!(
+        t3.estimate_decision(ErrorEstimate::Auto).unwrap(),
+        EstimateDecision::On(_)
+    ));
+}

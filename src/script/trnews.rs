@@ -20,11 +20,7 @@ pub fn register_types(engine: &mut Engine) {
         .register_type_with_name::<Delayed>("Delayed");
 }
 
-/// Largest companion cost (relative to the main runs) at which `error_estimate: "auto"`
-/// keeps the estimate: the issue's 15%.
-const AUTO_ESTIMATE_MAX_COST: f64 = 0.15;
-
-/// `error_estimate`: true, false or "auto" (on when the companions cost at most 15% extra).
+/// `error_estimate` as a script writes it: true, false or "auto" ([`ErrorEstimate`]).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(untagged)]
 pub enum EstimateChoice {
@@ -46,8 +42,8 @@ impl Default for EstimateChoice {
 pub struct ResponderOptions {
     /// Repeat every procedure on the scene's two companions (2x and 4x the element sizes on
     /// triangles, one and two orders lower on spectral elements) and report error estimates
-    /// (see `accuracy`): true, false, or "auto" (on when the companions cost at most 15% of
-    /// the main runs).
+    /// (see `accuracy`): true, false, or "auto" (on when the companions cost at most 30% of
+    /// the main runs, [`crate::trnews::AUTO_ESTIMATE_MAX_COST`]).
     pub error_estimate: EstimateChoice,
     /// The time step as a fraction of the scene's dt_crit, in (0, 1]: below the default 0.9
     /// to measure or shrink the central-difference time error (O(dt^2)).
@@ -63,28 +59,30 @@ impl Default for ResponderOptions {
     }
 }
 
-/// The companion scenes of an error estimate when `choice` asks for one: always for true,
-/// never for false, and for "auto" when they cost at most [`AUTO_ESTIMATE_MAX_COST`] extra
-/// (printing why not otherwise).
+/// The companion scenes of an error estimate when `choice` asks for one
+/// ([`Responder::estimate_decision`]), printing why not when "auto" finds them too costly.
 fn companions_wanted(
     ctx: &NativeCallContext,
     r: &Responder,
     choice: &EstimateChoice,
 ) -> ScriptResult<Option<Vec<Arc<crate::scene::Scene>>>> {
     use crate::script::WithPosition;
-    let word = match choice {
-        EstimateChoice::Flag(true) => "true",
-        EstimateChoice::Flag(false) => "false",
-        EstimateChoice::Word(w) => w.as_str(),
+    use crate::trnews::{ErrorEstimate, EstimateDecision, AUTO_ESTIMATE_MAX_COST};
+    let choice = match choice {
+        EstimateChoice::Flag(true) => ErrorEstimate::On,
+        EstimateChoice::Flag(false) => ErrorEstimate::Off,
+        EstimateChoice::Word(w) if w == "auto" => ErrorEstimate::Auto,
+        EstimateChoice::Word(other) => return Err(error(
+            ctx,
+            format!(
+                "invalid responder.error_estimate = \"{other}\": expected true, false or \"auto\""
+            ),
+        )),
     };
-    match word {
-        "false" => Ok(None),
-        "true" => Ok(Some(r.companion_scenes().at(ctx)?.0)),
-        "auto" => {
-            let (scenes, cost) = r.companion_scenes().at(ctx)?;
-            if cost <= AUTO_ESTIMATE_MAX_COST {
-                return Ok(Some(scenes));
-            }
+    match r.estimate_decision(choice).at(ctx)? {
+        EstimateDecision::Off => Ok(None),
+        EstimateDecision::On(scenes) => Ok(Some(scenes)),
+        EstimateDecision::TooCostly { cost } => {
             crate::script::HostContext::of(ctx)?.print(&format!(
                 "error estimate off: the companions at {} would add {:.0}% to the run \
                  time (auto allows {:.0}%); results carry no discretisation error \
@@ -95,12 +93,6 @@ fn companions_wanted(
             ));
             Ok(None)
         }
-        other => Err(error(
-            ctx,
-            format!(
-                "invalid responder.error_estimate = \"{other}\": expected true, false or \"auto\""
-            ),
-        )),
     }
 }
 
@@ -743,7 +735,7 @@ mod trnews_api {
         Ok(tr.responses[index(&ctx, k, tr.responses.len(), "receiver")?].clone())
     }
 
-    /// A responder with options #{error_estimate, step_fraction}: `step_fraction` sets the time step to that fraction of the scene's dt_crit (default 0.9); with `error_estimate: true` (or "auto" when that costs at most 15% extra) it also builds the scene's two companions (same laminate draw; on triangles 2x and 4x the element sizes, about 1/8 + 1/64 of the cost where every layer coarsens; on spectral elements one and two orders lower, about 0.95 of the cost at order 7), repeats every procedure on them and attaches error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
+    /// A responder with options #{error_estimate, step_fraction}: `step_fraction` sets the time step to that fraction of the scene's dt_crit (default 0.9); with `error_estimate: true` (or "auto" when that costs at most 30% extra) it also builds the scene's two companions (same laminate draw; on triangles 2x and 4x the element sizes, about 1/8 + 1/64 of the cost where every layer coarsens; on spectral elements one and two orders lower along x, about 1.2 times the cost of the quick preset), repeats every procedure on them and attaches error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
     #[rhai_fn(name = "responder", return_raw)]
     pub fn responder_with(
         ctx: NativeCallContext,
@@ -770,7 +762,7 @@ mod trnews_api {
         }
     }
 
-    /// Whether `choice` (true, false or "auto", as given to `responder`) turns the error estimate on for `r`: "auto" when the scene's companions (`scene.companions()`) would cost at most 15% extra (and says so when they would not). For scripts that estimate their own quantities from runs on the companions.
+    /// Whether `choice` (true, false or "auto", as given to `responder`) turns the error estimate on for `r`: "auto" when the scene's companions (`scene.companions()`) would cost at most 30% extra (and says so when they would not). For scripts that estimate their own quantities from runs on the companions.
     #[rhai_fn(global, return_raw)]
     pub fn error_estimate_wanted(
         ctx: NativeCallContext,

@@ -13,8 +13,8 @@
 //! the forward transform) gives a run whose recording, read at Omega^-1(w)
 //! ([`TimeDispersion::remove_from_trace`], the inverse transform), is the response the
 //! spatial discretisation gives without any time step error. Both are frequency warps of a
-//! signal ([`signal::warp_spectrum`]), a direct sum over samples and bins: with the margin
-//! ([`TimeDispersion::extended`]) 13% of the quick preset's default experiment.
+//! signal ([`signal::warp_spectrum`], a non-uniform FFT): with the margin
+//! ([`TimeDispersion::extended`]) 4% of the quick preset's default experiment.
 //!
 //! What stays: the dashpots see the velocity (u_{n+1} - u_{n-1}) / 2dt, whose symbol
 //! i sin(w dt) / dt is i Omega cos(w dt / 2), so an absorbing edge's impedance is off by

@@ -15,6 +15,38 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::Arc;
 
+/// Largest companion cost, relative to the main runs, at which [`ErrorEstimate::Auto`] turns
+/// the estimate on: issue 25's 30%.
+pub const AUTO_ESTIMATE_MAX_COST: f64 = 0.30;
+
+/// Whether a responder repeats its procedures on its error estimate's companions
+/// ([`Responder::estimate_decision`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ErrorEstimate {
+    /// Never.
+    #[default]
+    Off,
+    /// Always.
+    On,
+    /// When the companions cost at most [`AUTO_ESTIMATE_MAX_COST`] of the main runs.
+    Auto,
+}
+
+/// What an [`ErrorEstimate`] choice gives on a responder.
+#[derive(Clone, Debug)]
+pub enum EstimateDecision {
+    /// No estimate was asked for.
+    Off,
+    /// The companions' scenes, to add with [`Responder::with_companions`].
+    On(Vec<Arc<Scene>>),
+    /// "auto" and the companions would add `cost` (relative to the main runs), above
+    /// [`AUTO_ESTIMATE_MAX_COST`].
+    TooCostly {
+        /// The companions' run time relative to the main runs.
+        cost: f64,
+    },
+}
+
 /// Recorded responses of every receiver to one transmission.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Response {
@@ -399,7 +431,7 @@ impl Responder {
     /// each with its own stable step, and their run time relative to this responder's from
     /// DOFs x steps, sum over companions of (DOFs_c / DOFs) (dt / dt_c). On triangles about
     /// 1/8 + 1/64 where every layer coarsens, more where thin layers keep one element row or
-    /// set the step; on the order-7 spectral elements of the presets about 0.95. Building
+    /// set the step; on the quick preset's spectral elements about 1.2. Building
     /// them runs no simulation.
     pub fn companion_scenes(&self) -> Result<(Vec<Arc<Scene>>, f64)> {
         let scene = self.scene()?;
@@ -416,6 +448,20 @@ impl Responder {
             .sum::<f64>()
             / work(scene, self.dt_s);
         Ok((scenes, cost))
+    }
+
+    /// What `choice` gives on this responder: the companions' scenes to add with
+    /// [`Responder::with_companions`], no estimate, or none because "auto" found them too
+    /// costly (with their cost relative to the main runs).
+    pub fn estimate_decision(&self, choice: ErrorEstimate) -> Result<EstimateDecision> {
+        Ok(match choice {
+            ErrorEstimate::Off => EstimateDecision::Off,
+            ErrorEstimate::On => EstimateDecision::On(self.companion_scenes()?.0),
+            ErrorEstimate::Auto => match self.companion_scenes()? {
+                (scenes, cost) if cost <= AUTO_ESTIMATE_MAX_COST => EstimateDecision::On(scenes),
+                (_, cost) => EstimateDecision::TooCostly { cost },
+            },
+        })
     }
 
     /// Adds companions on `scenes` (from [`Responder::companion_scenes`]), built the way this

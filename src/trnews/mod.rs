@@ -23,7 +23,8 @@ pub use crate::lab::Recording;
 #[cfg(feature = "io")]
 pub use channel::lab_channel;
 pub use channel::{
-    to_record_of, Channel, ChannelIdentity, ImpulseChannel, RecordedChannel, Responder, Response,
+    to_record_of, Channel, ChannelIdentity, ErrorEstimate, EstimateDecision, ImpulseChannel,
+    RecordedChannel, Responder, Response, AUTO_ESTIMATE_MAX_COST,
 };
 pub use delayed::{delayed_tr_news, delayed_tr_news_within, Delayed, DelayedEstimates};
 pub use focus::{tr_news, Focus, FocusEstimates, TrNews, TrNewsSpec};
