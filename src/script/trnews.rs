@@ -68,16 +68,21 @@ fn companions_wanted(
 ) -> ScriptResult<Option<Vec<Arc<crate::scene::Scene>>>> {
     use crate::script::WithPosition;
     use crate::trnews::{ErrorEstimate, EstimateDecision, AUTO_ESTIMATE_MAX_COST};
+    // A word as well as a flag: `--set error_estimate=true` may reach a script as either.
     let choice = match choice {
         EstimateChoice::Flag(true) => ErrorEstimate::On,
         EstimateChoice::Flag(false) => ErrorEstimate::Off,
+        EstimateChoice::Word(w) if w == "true" => ErrorEstimate::On,
+        EstimateChoice::Word(w) if w == "false" => ErrorEstimate::Off,
         EstimateChoice::Word(w) if w == "auto" => ErrorEstimate::Auto,
-        EstimateChoice::Word(other) => return Err(error(
-            ctx,
-            format!(
+        EstimateChoice::Word(other) => {
+            return Err(error(
+                ctx,
+                format!(
                 "invalid responder.error_estimate = \"{other}\": expected true, false or \"auto\""
             ),
-        )),
+            ))
+        }
     };
     match r.estimate_decision(choice).at(ctx)? {
         EstimateDecision::Off => Ok(None),
