@@ -47,6 +47,7 @@ fn main() {
             order_x: p,
             min_order_y: 1,
             max_order_y: p,
+            extra_order_y: 0,
             element_size_x_m: h,
             element_size_y_m: h,
         };

@@ -29,6 +29,7 @@ fn build(
         order_x: px,
         min_order_y: 1,
         max_order_y: max_y,
+        extra_order_y: 0,
         element_size_x_m: hx,
         element_size_y_m: row_m,
     };

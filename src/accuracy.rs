@@ -23,6 +23,17 @@
 //! The refinement ratio is nominally 2; in a laminate whose thin layers get one element row
 //! at every size, or whose step is set by such a layer, the effective ratio is smaller. That
 //! shows as an observed order away from p, and the verdict says so.
+//!
+//! On spectral elements the two companions are lower along x only, so they do not see the
+//! error across the layers. A third companion has every element row one order higher across
+//! (its own, shorter step; [`crate::scene::SceneSpec::companions`]): the difference
+//! d_y = |Q_p - Q_across| from it is the error across of the main run, to within the
+//! companion's own error across, which an order more divides several times (p-enrichment).
+//! The stated error combines the two sources (a waveform's in quadrature, a scalar's as a
+//! sum: [`Estimate::combined`]), and the estimate names the larger as the dominant source
+//! ([`Estimate::dominant_source`]). On spectral elements the companions along x also lower
+//! some rows' orders across (the rule across keeps each row from shortening the step, and
+//! their step is longer), so "along x" is what they see, part of it across.
 
 use crate::error::Result;
 use crate::signal::{self, Signal};
@@ -62,7 +73,7 @@ impl Refinement {
     pub fn companions(self) -> &'static str {
         match self {
             Refinement::ElementSizes => "2h and 4h",
-            Refinement::Orders => "orders p-1 and p-2",
+            Refinement::Orders => "orders p-1 and p-2 along x and one more across",
         }
     }
 
@@ -94,6 +105,27 @@ pub enum Verdict {
     MeshIndependent,
 }
 
+/// Where a discretisation error comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Source {
+    /// What the refinement's two companions see: the element sizes (triangles), the order
+    /// along x (spectral elements).
+    Refinement,
+    /// The orders across the layers (spectral elements' third companion).
+    Across,
+}
+
+impl Source {
+    /// As the messages name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Source::Refinement => "along x",
+            Source::Across => "across the layers",
+        }
+    }
+}
+
 /// A quantity with its discretisation error estimate.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Estimate {
@@ -113,6 +145,11 @@ pub struct Estimate {
     pub observed_order: Option<f64>,
     /// Whether to trust `error`.
     pub verdict: Verdict,
+    /// The error across the layers d_y = |Q - Q_across| (waveforms: relative L2), from the
+    /// companion one order higher across every row, when the estimate has one; `error`
+    /// includes it.
+    #[serde(default)]
+    pub across: Option<f64>,
 }
 
 impl Estimate {
@@ -153,6 +190,7 @@ impl Estimate {
             error,
             observed_order,
             verdict,
+            across: None,
         }
     }
 
@@ -198,46 +236,146 @@ impl Estimate {
             error,
             observed_order,
             verdict,
+            across: None,
         })
     }
 
-    /// "1.2300e-2 +- 4.50e-4 (observed order 1.90)", "... (error unknown, ...: refine)";
-    /// for a waveform "relative L2 error 3.1e-2 (observed order 1.95)" or why unknown.
-    pub fn describe(&self) -> String {
+    /// Estimate of a dimensional scalar from its `values` on the main discretisation and on
+    /// each companion in the order [`crate::scene::SceneSpec::companions`] gives them: the
+    /// refinement's two, then the one across the layers where there is one.
+    pub fn scalar_of(values: &[f64], refinement: Refinement) -> Result<Estimate> {
+        let [fine, medium, coarse] = first_three(values)?;
+        let e = Self::scalar(fine, medium, coarse, refinement);
+        let scale = values.iter().fold(0f64, |m, v| m.max(v.abs()));
+        Ok(across_of(values, e, scale, |a| (fine - a).abs()))
+    }
+
+    /// [`Estimate::dimensionless`] from the values on the main discretisation and on each
+    /// companion (see [`Estimate::scalar_of`]).
+    pub fn dimensionless_of(values: &[f64], refinement: Refinement) -> Result<Estimate> {
+        let [fine, medium, coarse] = first_three(values)?;
+        let e = Self::dimensionless(fine, medium, coarse, refinement);
+        let scale = values.iter().fold(1f64, |m, v| m.max(v.abs()));
+        Ok(across_of(values, e, scale, |a| (fine - a).abs()))
+    }
+
+    /// [`Estimate::waveform`] from the traces on the main discretisation and on each
+    /// companion (see [`Estimate::scalar_of`]); the companion across is compared with the
+    /// main trace by the relative L2 difference over `window`.
+    pub fn waveform_of(
+        traces: &[&Signal],
+        window: (f64, f64),
+        refinement: Refinement,
+    ) -> Result<Estimate> {
+        let [fine, medium, coarse] = first_three(traces)?;
+        let e = Self::waveform(fine, medium, coarse, window, refinement)?;
+        match traces.get(3) {
+            None => Ok(e),
+            Some(across) => Ok(e.with_across(relative_difference(fine, across, window)?, 1.0)),
+        }
+    }
+
+    /// This estimate with the error across the layers `d` added (see the module doc) to a
+    /// stated error ([`Estimate::combined`]); as the whole error when the refinement's
+    /// companions agree (then the verdict is "reliable" unless `d` too is round-off of
+    /// `scale`); a "refine" stays one.
+    fn with_across(mut self, d: f64, scale: f64) -> Estimate {
+        self.across = Some(d);
+        match self.verdict {
+            Verdict::MeshIndependent if d > ROUND_OFF * scale => {
+                (self.error, self.verdict) = (Some(d), Verdict::Reliable);
+            }
+            Verdict::MeshIndependent | Verdict::Refine => {}
+            Verdict::Reliable | Verdict::UpperBound => {
+                self.error = self.error.map(|e| self.combined(e, d));
+            }
+        }
+        self
+    }
+
+    /// The error of two sources e_x and e_y: a waveform's in quadrature, sqrt(e_x^2 + e_y^2)
+    /// (the relative L2 norm of the sum of two error signals of different origin, whose
+    /// cross term averages out), a scalar's as the sum e_x + e_y (one number has no such
+    /// average: the sources may add).
+    fn combined(&self, e_x: f64, e_y: f64) -> f64 {
+        if self.waveform {
+            e_x.hypot(e_y)
+        } else {
+            e_x + e_y
+        }
+    }
+
+    /// The part of the stated error the refinement's companions see (the inverse of
+    /// [`Estimate::combined`] with the error across), when the estimate separates them.
+    fn refinement_part(&self) -> Option<f64> {
+        let (across, error) = (self.across?, self.error?);
+        Some(if self.waveform {
+            (error * error - across * across).max(0.0).sqrt()
+        } else {
+            (error - across).max(0.0)
+        })
+    }
+
+    /// The larger of the error's sources, when the estimate separates them (it has a
+    /// companion across and states an error).
+    pub fn dominant_source(&self) -> Option<Source> {
+        let (across, along) = (self.across?, self.refinement_part()?);
+        Some(if across >= along {
+            Source::Across
+        } else {
+            Source::Refinement
+        })
+    }
+
+    /// "observed order 1.90", then, when the estimate has a companion across, each source's
+    /// part and the dominant one ("observed order 3.7; along x 2.8e-3, across the layers
+    /// 1.6e-3, along x dominant").
+    fn detail(&self) -> String {
         let order = self
             .observed_order
             .map_or("-".to_string(), |q| format!("{q:.2}"));
+        let across = match (self.across, self.refinement_part(), self.dominant_source()) {
+            (Some(a), Some(x), Some(source)) => format!(
+                "; {} {x:.2e}, {} {a:.2e}, {} dominant",
+                Source::Refinement.name(),
+                Source::Across.name(),
+                source.name()
+            ),
+            (Some(a), _, _) => format!("; {} {a:.2e}", Source::Across.name()),
+            _ => String::new(),
+        };
+        format!("observed order {order}{across}")
+    }
+
+    /// "1.2300e-2 +- 4.50e-4 (observed order 1.90)", "... (error unknown, ...: refine)";
+    /// for a waveform "relative L2 error 3.1e-2 (observed order 1.95)" or why unknown; with a
+    /// companion across, the share of the error across the layers and the dominant source.
+    pub fn describe(&self) -> String {
+        let detail = self.detail();
         if self.waveform {
             return match (self.verdict, self.error) {
-                (Verdict::Reliable, Some(e)) => {
-                    format!("relative L2 error {e:.2e} (observed order {order})")
-                }
+                (Verdict::Reliable, Some(e)) => format!("relative L2 error {e:.2e} ({detail})"),
                 (Verdict::UpperBound, Some(e)) => {
-                    format!("relative L2 error below {e:.2e} (observed order {order})")
+                    format!("relative L2 error below {e:.2e} ({detail})")
                 }
                 (Verdict::MeshIndependent, _) => "unchanged between meshes".into(),
                 _ => format!(
-                    "relative L2 error unknown (differs from {} by {:.2e}, observed order {order}): refine",
+                    "relative L2 error unknown (differs from {} by {:.2e}, {detail}): refine",
                     self.refinement.first_companion(),
                     self.companions[0]
                 ),
             };
         }
         match (self.verdict, self.error) {
-            (Verdict::Reliable, Some(e)) => {
-                format!("{:.4e} +- {e:.2e} (observed order {order})", self.value)
-            }
+            (Verdict::Reliable, Some(e)) => format!("{:.4e} +- {e:.2e} ({detail})", self.value),
             (Verdict::UpperBound, Some(e)) => {
-                format!(
-                    "{:.4e}, error below {e:.2e} (observed order {order})",
-                    self.value
-                )
+                format!("{:.4e}, error below {e:.2e} ({detail})", self.value)
             }
             (Verdict::MeshIndependent, _) => {
                 format!("{:.4e} (unchanged between meshes)", self.value)
             }
             _ => format!(
-                "{:.4e} (error unknown, observed order {order}, change from {} {:.2e}: refine)",
+                "{:.4e} (error unknown, {detail}, change from {} {:.2e}: refine)",
                 self.value,
                 self.refinement.first_companion(),
                 (self.value - self.companions[0]).abs()
@@ -246,13 +384,18 @@ impl Estimate {
     }
 
     /// A short form for figure titles: "err 3.1%", "err < 3.1%", "err ? (2h: 30%)" for
-    /// waveforms (relative L2); "0.138 +- 4.5e-4", "0.138 (err ?, 2h: 1.3e-2)" for scalars.
+    /// waveforms (relative L2), "err 3.1% (mostly across)" when the error across the layers
+    /// dominates; "0.138 +- 4.5e-4", "0.138 (err ?, 2h: 1.3e-2)" for scalars.
     pub fn brief(&self) -> String {
         if self.waveform {
             let pct = |x: f64| format!("{:.1}%", 100.0 * x);
+            let mostly = match self.dominant_source() {
+                Some(Source::Across) => " (mostly across)",
+                _ => "",
+            };
             return match (self.verdict, self.error) {
-                (Verdict::Reliable, Some(e)) => format!("err {}", pct(e)),
-                (Verdict::UpperBound, Some(e)) => format!("err < {}", pct(e)),
+                (Verdict::Reliable, Some(e)) => format!("err {}{mostly}", pct(e)),
+                (Verdict::UpperBound, Some(e)) => format!("err < {}{mostly}", pct(e)),
                 (Verdict::MeshIndependent, _) => "mesh-independent".into(),
                 _ => format!(
                     "err ? ({}: {})",
@@ -277,6 +420,48 @@ impl Estimate {
             ),
         }
     }
+}
+
+/// The first three of `values` (the main discretisation's and the refinement's two
+/// companions'), refusing fewer; a fourth is the companion across, and more is an error.
+fn first_three<T: Copy>(values: &[T]) -> Result<[T; 3]> {
+    match values {
+        [a, b, c] | [a, b, c, _] => Ok([*a, *b, *c]),
+        _ => Err(crate::error::Error::invalid(
+            "companions",
+            values.len(),
+            "an estimate takes the main discretisation's value and its companions': 3 values, \
+             or 4 with the companion across the layers",
+        )),
+    }
+}
+
+/// `e` with the error across the layers from the fourth of `values`, if there is one
+/// (`difference` of the main value and it).
+fn across_of(values: &[f64], e: Estimate, scale: f64, difference: impl Fn(f64) -> f64) -> Estimate {
+    match values.get(3) {
+        Some(&across) => e.with_across(difference(across), scale),
+        None => e,
+    }
+}
+
+/// Relative L2 difference ||fine - other|| / ||fine|| over `window`, `other` resampled to
+/// `fine`'s step (0 when `fine` is zero there).
+fn relative_difference(fine: &Signal, other: &Signal, window: (f64, f64)) -> Result<f64> {
+    let f = fine.window(window.0, window.1)?;
+    let o = signal::resample(other, fine.dt_s)?.window(window.0, window.1)?;
+    let n = f.len().min(o.len());
+    let size = f.samples[..n].iter().map(|x| x * x).sum::<f64>().sqrt();
+    if size == 0.0 {
+        return Ok(0.0);
+    }
+    let diff = f.samples[..n]
+        .iter()
+        .zip(&o.samples[..n])
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    Ok(diff / size)
 }
 
 /// (error, observed order, verdict) from the differences d1 = |Q_h - Q_2h| and
@@ -365,5 +550,69 @@ mod tests {
             (e.error.unwrap() / truth - 1.0).abs() < 0.1,
             "{e:?} vs {truth}"
         );
+    }
+
+    #[test]
+    fn the_error_across_adds_to_the_error_along_x_and_names_the_dominant_source() {
+        // Along x: Q = 1 + 0.3 * 2^-p at p = 7, 6, 5 (a halving per order): error 0.3 * 2^-7.
+        let q = |p: i32| 1.0 + 0.3 * 2f64.powi(-p);
+        let along = 0.3 * 2f64.powi(-7);
+        let across = 3.0 * along;
+        let values = [q(7), q(6), q(5), q(7) + across];
+        let e = Estimate::scalar_of(&values, Refinement::Orders).unwrap();
+        assert_eq!(e.verdict, Verdict::Reliable);
+        assert!((e.error.unwrap() - 4.0 * along).abs() < 1e-12, "{e:?}");
+        assert_eq!(e.across, Some((q(7) - values[3]).abs()));
+        assert_eq!(e.dominant_source(), Some(Source::Across));
+        let text = e.describe();
+        assert!(text.contains("across the layers dominant"), "{text}");
+        let small = Estimate::scalar_of(&[q(7), q(6), q(5), q(7) + 0.1 * along], Refinement::Orders)
+            .unwrap();
+        assert_eq!(small.dominant_source(), Some(Source::Refinement));
+        // Three values: no companion across, nothing separated.
+        let three = Estimate::scalar_of(&values[..3], Refinement::Orders).unwrap();
+        assert_eq!((three.across, three.dominant_source()), (None, None));
+        assert!(Estimate::scalar_of(&values[..2], Refinement::Orders).is_err());
+        assert!(Estimate::scalar_of(&[1.0; 5], Refinement::Orders).is_err());
+    }
+
+    #[test]
+    fn where_the_companions_along_x_agree_the_error_across_is_the_error() {
+        // Normal incidence: the solution does not vary along x.
+        let e = Estimate::dimensionless_of(&[0.5, 0.5, 0.5, 0.5 + 2e-4], Refinement::Orders)
+            .unwrap();
+        assert_eq!(e.verdict, Verdict::Reliable);
+        assert!((e.error.unwrap() - 2e-4).abs() < 1e-15);
+        assert_eq!(e.dominant_source(), Some(Source::Across));
+        // Round-off across as well: mesh-independent.
+        let same = Estimate::dimensionless_of(&[0.5, 0.5, 0.5, 0.5 + 1e-14], Refinement::Orders)
+            .unwrap();
+        assert_eq!(same.verdict, Verdict::MeshIndependent);
+        // A "refine" along x stays one: no error is claimed.
+        let refine = Estimate::scalar_of(&[1.0, 1.2, 1.0, 1.1], Refinement::Orders).unwrap();
+        assert_eq!((refine.verdict, refine.error), (Verdict::Refine, None));
+        assert!((refine.across.unwrap() - 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_waveforms_error_across_is_its_relative_l2_difference() {
+        let dt = 1e-9;
+        let wave = |a: f64| Signal::new(dt, 0.0, (0..100).map(|k| a * (k as f64 * 0.1).sin()).collect()).unwrap();
+        let (f, across) = (wave(1.0), wave(1.01));
+        let e = Estimate::waveform_of(&[&f, &f, &f, &across], (0.0, 1e-7), Refinement::Orders)
+            .unwrap();
+        assert!((e.error.unwrap() - 0.01).abs() < 1e-12, "{e:?}");
+        assert_eq!(e.brief(), "err 1.0% (mostly across)");
+        // With an error along x too, the two add in quadrature.
+        let shifted = |s: f64| {
+            let samples = (0..100).map(|k| ((k as f64 - s) * 0.1).sin()).collect();
+            Signal::new(dt, 0.0, samples).unwrap()
+        };
+        let (f, m, c) = (shifted(0.0), shifted(0.01), shifted(0.03));
+        let along = Estimate::waveform(&f, &m, &c, (0.0, 1e-7), Refinement::Orders).unwrap();
+        let both = Estimate::waveform_of(&[&f, &m, &c, &across], (0.0, 1e-7), Refinement::Orders)
+            .unwrap();
+        let expected = along.error.unwrap().hypot(both.across.unwrap());
+        assert!((both.error.unwrap() - expected).abs() < 1e-15, "{both:?}");
     }
 }

@@ -314,6 +314,7 @@ fn sem_errors(order: usize, dt: f64, time_dispersion: Option<TimeDispersionSpec>
             order_x: order,
             min_order_y: 1,
             max_order_y: order,
+            extra_order_y: 0,
         },
         ..spec(H0, EdgeCondition::Roller)
     };

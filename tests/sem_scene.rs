@@ -19,6 +19,7 @@ fn sem(order: usize) -> DiscretisationSpec {
         order_x: order,
         min_order_y: 1,
         max_order_y: order,
+        extra_order_y: 0,
     }
 }
 
@@ -139,12 +140,14 @@ fn the_energy_ledger_closes_on_closed_and_open_sem_scenes() {
 /// The contact law changes nothing before the faces first touch: the cracked SEM scene with
 /// contact and the same scene with an open crack (`contact: ()`) record the same traces bit
 /// for bit up to the step of the first contact, and differ after it. Both keep their step's
-/// error: the time-dispersion transforms act on whole records, so with them a change after
-/// the first contact reaches back before it (by the transform's band edge).
+/// error and record the raw receivers (no transducer band): the time-dispersion transforms
+/// and the band act on whole records (by FFT), so with them a change after the first contact
+/// reaches back before it (by the transform's band edge, and at round-off).
 #[test]
 fn contact_on_a_sem_crack_acts_from_the_first_contact_and_not_before() {
     let spec = SceneSpec {
         time_dispersion: None,
+        transducer: None,
         ..smoke_sem()
     };
     let mut open = spec.clone();
@@ -222,6 +225,7 @@ fn bad_sem_scenes_are_errors_naming_the_field() {
                 order_x,
                 min_order_y,
                 max_order_y,
+                extra_order_y: 0,
             },
             ..smoke_sem()
         };
@@ -255,28 +259,60 @@ fn bad_sem_scenes_are_errors_naming_the_field() {
 }
 
 /// The companions of a spectral-element scene's error estimate lower the order along x by
-/// one and two on the same elements (and the order across to at most that), keep the
-/// laminate draw, and are refused below order 3 with an error naming the field.
+/// one and two on the same elements (and the order across to at most that), then raise every
+/// row's order across by one; they keep the laminate draw, and are refused below order 3
+/// with an error naming the field. On the quick preset the companions along x keep or lower
+/// each row's order across (their longer step lets the rule across keep fewer rows at the
+/// ceiling), and the companion across has each row's order one higher than the preset's.
 #[test]
-fn sem_companions_lower_the_order_and_keep_the_elements() {
+fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
     use trnews::accuracy::Refinement;
-    use trnews::scene::{DiscretisationKind, Resolution, SemPreset};
+    use trnews::scene::{DiscretisationKind, LaminateSpec, Resolution, SemPreset};
+    use trnews::sem::SemModel;
     let spec = SceneSpec::preset(Resolution::Quick);
     assert_eq!(spec.refinement(), Refinement::Orders);
-    let orders = spec.companions().unwrap().map(|c| {
-        let same_otherwise = SceneSpec {
-            discretisation: c.discretisation,
-            ..spec.clone()
-        };
-        assert_eq!(c, same_otherwise);
-        c.discretisation
-    });
-    let expected = [(6, 4), (5, 4)].map(|(order_x, max_order_y)| DiscretisationSpec::Sem {
-        order_x,
-        min_order_y: SemPreset::of(Resolution::Quick).min_order_y,
-        max_order_y,
-    });
+    let companions = spec.companions().unwrap();
+    let orders: Vec<DiscretisationSpec> = companions
+        .iter()
+        .map(|c| {
+            let same_otherwise = SceneSpec {
+                discretisation: c.discretisation,
+                ..spec.clone()
+            };
+            assert_eq!(*c, same_otherwise);
+            c.discretisation
+        })
+        .collect();
+    let floor = SemPreset::of(Resolution::Quick).min_order_y;
+    let expected: Vec<DiscretisationSpec> = [(6, 0), (5, 0), (7, 1)]
+        .map(|(order_x, extra_order_y)| DiscretisationSpec::Sem {
+            order_x,
+            min_order_y: floor,
+            max_order_y: 4,
+            extra_order_y,
+        })
+        .into();
     assert_eq!(orders, expected);
+
+    let LaminateSpec::Stochastic(draw) = &spec.laminate else {
+        panic!("the quick preset's laminate is stochastic")
+    };
+    let laminate = trnews::laminate::Laminate::stochastic(draw, spec.plane).unwrap();
+    let row_orders = |s: &SceneSpec| {
+        let cut = s.discretisation.sem_cut(s).unwrap();
+        SemModel::layered(&laminate, s.width_m, &cut)
+            .unwrap()
+            .row_orders()
+    };
+    let main = row_orders(&spec);
+    for (name, c) in [("order 6", &companions[0]), ("order 5", &companions[1])] {
+        let rows = row_orders(c);
+        assert_eq!(rows.len(), main.len());
+        assert!(rows.iter().zip(&main).all(|(c, m)| c <= m), "{name} along x");
+    }
+    let raised: Vec<usize> = main.iter().map(|p| p + 1).collect();
+    assert_eq!(row_orders(&companions[2]), raised, "one more across");
+
     let low = SceneSpec {
         discretisation: sem(4),
         ..spec.clone()
@@ -296,6 +332,7 @@ fn sem_companions_lower_the_order_and_keep_the_elements() {
     let t3 = SceneSpec::preset_on(Resolution::Quick, DiscretisationKind::T3);
     assert_eq!(t3.refinement(), Refinement::ElementSizes);
     let coarse = t3.companions().unwrap();
+    assert_eq!(coarse.len(), 2);
     assert_eq!(coarse[1].element_size_x_m, 4.0 * t3.element_size_x_m);
 }
 
@@ -375,7 +412,7 @@ fn auto_turns_the_estimate_on_where_the_companions_are_cheap() {
         EstimateDecision::Off
     ));
     match sem.estimate_decision(ErrorEstimate::On).unwrap() {
-        EstimateDecision::On(scenes) => assert_eq!(scenes.len(), 2),
+        EstimateDecision::On(scenes) => assert_eq!(scenes.len(), 3),
         other => panic!("{other:?}"),
     }
     let sem_cost = sem.companion_scenes().unwrap().1;

@@ -163,6 +163,7 @@ impl SceneSpec {
                         order_x: p.order_x,
                         min_order_y: p.min_order_y,
                         max_order_y: p.max_order_y,
+                        extra_order_y: 0,
                     },
                     ..t3
                 }
@@ -170,18 +171,23 @@ impl SceneSpec {
         }
     }
 
-    /// The two companions of an error estimate (the same laminate draw;
-    /// [`SceneSpec::refinement`]): on linear triangles the scene at 2x and 4x
+    /// The companions of an error estimate (the same laminate draw;
+    /// [`SceneSpec::refinement`]), in the order the estimates take them
+    /// ([`crate::accuracy::Estimate::scalar_of`]): on linear triangles the scene at 2x and 4x
     /// the element sizes; on spectral elements the same elements at orders `order_x` - 1 and
     /// `order_x` - 2 along x, at most that many across (a coarser element would leave the
-    /// asymptotic range at once: a halving of h changes an order-7 error by 2^14).
-    pub fn companions(&self) -> Result<[SceneSpec; 2]> {
+    /// asymptotic range at once: a halving of h changes an order-7 error by 2^14), then the
+    /// companion across the layers: every row one order higher across than this scene's, at
+    /// its own stable step (the companions along x keep the orders across where they can, so
+    /// they do not see the error across).
+    pub fn companions(&self) -> Result<Vec<SceneSpec>> {
         match self.discretisation {
-            DiscretisationSpec::T3 => Ok([self.coarsened(2.0)?, self.coarsened(4.0)?]),
+            DiscretisationSpec::T3 => Ok(vec![self.coarsened(2.0)?, self.coarsened(4.0)?]),
             DiscretisationSpec::Sem {
                 order_x,
                 min_order_y,
                 max_order_y,
+                extra_order_y,
             } => {
                 if order_x < 3 {
                     return Err(Error::invalid(
@@ -191,15 +197,25 @@ impl SceneSpec {
                          p - 2: they need order_x >= 3",
                     ));
                 }
-                let lowered = |by: usize| SceneSpec {
-                    discretisation: DiscretisationSpec::Sem {
+                let with = |discretisation| SceneSpec {
+                    discretisation,
+                    ..self.clone()
+                };
+                let lowered = |by: usize| {
+                    with(DiscretisationSpec::Sem {
                         order_x: order_x - by,
                         min_order_y: min_order_y.min(order_x - by),
                         max_order_y: max_order_y.min(order_x - by),
-                    },
-                    ..self.clone()
+                        extra_order_y,
+                    })
                 };
-                Ok([lowered(1), lowered(2)])
+                let across = with(DiscretisationSpec::Sem {
+                    order_x,
+                    min_order_y,
+                    max_order_y,
+                    extra_order_y: extra_order_y + 1,
+                });
+                Ok(vec![lowered(1), lowered(2), across])
             }
         }
     }
@@ -217,7 +233,8 @@ impl SceneSpec {
         }
     }
 
-    /// How [`SceneSpec::companions`] refine this scene.
+    /// How [`SceneSpec::companions`] refine this scene (along x; the companion across the
+    /// layers is the third).
     pub fn refinement(&self) -> Refinement {
         match self.discretisation {
             DiscretisationSpec::T3 => Refinement::ElementSizes,

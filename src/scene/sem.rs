@@ -22,7 +22,11 @@ use crate::solve::{
 pub(super) fn build(spec: &SceneSpec, cut: &SemSpec) -> Result<Scene> {
     check_options(spec, cut)?;
     let laminate = build_laminate(&spec.laminate, spec.plane)?;
-    check_mesh_size(spec, &laminate, (cut.order_x, cut.max_order_y))?;
+    check_mesh_size(
+        spec,
+        &laminate,
+        (cut.order_x, cut.max_order_y + cut.extra_order_y),
+    )?;
     let mut model = SemModel::layered(&laminate, spec.width_m, cut)?;
     crate::budget::check()?;
     let height = laminate.thickness_m();
@@ -95,8 +99,8 @@ pub(super) fn build(spec: &SceneSpec, cut: &SemSpec) -> Result<Scene> {
 }
 
 /// Refuses what spectral-element scenes do not take: a Gmsh mesh, orders outside
-/// 1..=[`MAX_ORDER`] or a lowest order across above the highest, a width that is not a
-/// positive length.
+/// 1..=[`MAX_ORDER`] (the extra orders across included) or a lowest order across above the
+/// highest, a width that is not a positive length.
 fn check_options(spec: &SceneSpec, cut: &SemSpec) -> Result<()> {
     if let Some(g) = &spec.gmsh {
         return Err(Error::invalid(
@@ -120,6 +124,16 @@ fn check_options(spec: &SceneSpec, cut: &SemSpec) -> Result<()> {
                 format!("must be 1..={MAX_ORDER}"),
             ));
         }
+    }
+    if cut.max_order_y + cut.extra_order_y > MAX_ORDER {
+        return Err(Error::invalid(
+            "discretisation.extra_order_y",
+            cut.extra_order_y,
+            format!(
+                "takes discretisation.max_order_y = {} past {MAX_ORDER}",
+                cut.max_order_y
+            ),
+        ));
     }
     if cut.min_order_y > cut.max_order_y {
         return Err(Error::invalid(

@@ -476,8 +476,8 @@ pub enum DiscretisationSpec {
     T3,
     /// Spectral elements ([`crate::sem`]): GLL points of `order_x` along x in every element,
     /// and across each element row at least `min_order_y`, and above it the highest order up
-    /// to `max_order_y` that does not shorten the time step, judged per material
-    /// ([`crate::sem::SemSpec`]).
+    /// to `max_order_y` that does not shorten the time step, judged per material, then
+    /// `extra_order_y` more ([`crate::sem::SemSpec`]).
     Sem {
         /// Polynomial order along x.
         order_x: usize,
@@ -486,7 +486,15 @@ pub enum DiscretisationSpec {
         min_order_y: usize,
         /// Highest polynomial order across an element row.
         max_order_y: usize,
+        /// Orders added across every row after the rule chose them (0 when not given; 1 on
+        /// the error estimate's companion across the layers, [`SceneSpec::companions`]).
+        #[serde(default, skip_serializing_if = "is_zero")]
+        extra_order_y: usize,
     },
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 fn order_one() -> usize {
@@ -502,10 +510,12 @@ impl DiscretisationSpec {
                 order_x,
                 min_order_y,
                 max_order_y,
+                extra_order_y,
             } => Some(SemSpec {
                 order_x,
                 min_order_y,
                 max_order_y,
+                extra_order_y,
                 element_size_x_m: spec.element_size_x_m,
                 element_size_y_m: spec.element_size_y_m,
             }),

@@ -1,8 +1,8 @@
 //! Rhai module `accuracy`: discretisation error estimates (type `Estimate`), the ones the
 //! TR-NEWS procedures attach with `error_estimate: true` and estimates of a script's own
-//! quantities from runs on a scene and its two companions (h, 2h, 4h on triangles; orders p,
-//! p - 1, p - 2 on spectral elements; see [`crate::accuracy`]). The overloads without a scene
-//! assume triangles.
+//! quantities from runs on a scene and its companions (h, 2h, 4h on triangles; orders p,
+//! p - 1, p - 2 along x and one more across on spectral elements; see [`crate::accuracy`]).
+//! The overloads without a scene take three values at h, 2h, 4h on triangles.
 
 use crate::accuracy::Estimate;
 use rhai::plugin::*;
@@ -21,7 +21,7 @@ pub fn module() -> Module {
 #[export_module]
 mod accuracy_api {
     use crate::accuracy::{Estimate, Refinement, Verdict};
-    use crate::script::convert::WithPosition;
+    use crate::script::convert::{floats, WithPosition};
     use crate::script::scene::SceneRef;
     use crate::signal::Signal;
     use rhai::{Array, Dynamic, NativeCallContext, FLOAT};
@@ -33,10 +33,11 @@ mod accuracy_api {
         Estimate::scalar(fine, medium, coarse, Refinement::ElementSizes)
     }
 
-    /// Estimate of a dimensional scalar from its values on `scene` and on its two `scene.companions()` (2h and 4h on triangles, orders p - 1 and p - 2 on spectral elements).
-    #[rhai_fn(name = "scalar")]
-    pub fn scalar_of(fine: FLOAT, medium: FLOAT, coarse: FLOAT, scene: SceneRef) -> Estimate {
-        Estimate::scalar(fine, medium, coarse, scene.spec.refinement())
+    /// Estimate of a dimensional scalar from its `values` on `scene` and on each of `scene.companions()`, in that order (2h and 4h on triangles; orders p - 1 and p - 2 along x, then one more across, on spectral elements).
+    #[rhai_fn(name = "scalar", return_raw)]
+    pub fn scalar_of(ctx: NativeCallContext, values: Array, scene: SceneRef) -> Res<Estimate> {
+        let values = floats(&ctx, &values.into(), "values")?;
+        Estimate::scalar_of(&values, scene.spec.refinement()).at(&ctx)
     }
 
     /// Richardson estimate of a dimensionless measure of order one (misfit, residual, asymmetry) at h, 2h, 4h; changes below 1e-10 are round-off.
@@ -64,30 +65,50 @@ mod accuracy_api {
         .at(&ctx)
     }
 
-    /// Estimate of a dimensionless measure of order one from its values on `scene` and on its two `scene.companions()`; changes below 1e-10 are round-off.
-    #[rhai_fn(name = "dimensionless")]
+    /// Estimate of a dimensionless measure of order one from its `values` on `scene` and on each of `scene.companions()`, in that order; changes below 1e-10 are round-off.
+    #[rhai_fn(name = "dimensionless", return_raw)]
     pub fn dimensionless_of(
-        fine: FLOAT,
-        medium: FLOAT,
-        coarse: FLOAT,
+        ctx: NativeCallContext,
+        values: Array,
         scene: SceneRef,
-    ) -> Estimate {
-        Estimate::dimensionless(fine, medium, coarse, scene.spec.refinement())
+    ) -> Res<Estimate> {
+        let values = floats(&ctx, &values.into(), "values")?;
+        Estimate::dimensionless_of(&values, scene.spec.refinement()).at(&ctx)
     }
 
-    /// Estimate of the relative L2 error of the trace `fine` over t_start_s..t_end_s, recorded on `scene`, from the same trace on its two `scene.companions()` (`medium`, `coarse`), resampled to the fine step.
+    /// Estimate of the relative L2 error over t_start_s..t_end_s of the first of `traces`, recorded on `scene`, from the same trace on each of `scene.companions()` (the rest of `traces`, in that order), resampled to the first's step.
     #[rhai_fn(name = "waveform", return_raw)]
     pub fn waveform_of(
         ctx: NativeCallContext,
-        fine: Signal,
-        medium: Signal,
-        coarse: Signal,
+        traces: Array,
         t_start_s: FLOAT,
         t_end_s: FLOAT,
         scene: SceneRef,
     ) -> Res<Estimate> {
+        let traces = traces
+            .into_iter()
+            .map(|t| {
+                t.try_cast::<Signal>().ok_or_else(|| {
+                    crate::script::convert::error(&ctx, "accuracy::waveform: traces must be signals")
+                })
+            })
+            .collect::<Res<Vec<Signal>>>()?;
+        let traces: Vec<&Signal> = traces.iter().collect();
         let refinement = scene.spec.refinement();
-        Estimate::waveform(&fine, &medium, &coarse, (t_start_s, t_end_s), refinement).at(&ctx)
+        Estimate::waveform_of(&traces, (t_start_s, t_end_s), refinement).at(&ctx)
+    }
+
+    /// The error across the layers |Q - Q_across| (waveforms: relative L2) from the companion one order higher across, included in `error`; () without that companion.
+    #[rhai_fn(global, get = "across", pure)]
+    pub fn across(e: &mut Estimate) -> Dynamic {
+        e.across.map_or(Dynamic::UNIT, Dynamic::from)
+    }
+
+    /// The larger source of the error, "along x" or "across the layers", when the estimate has a companion across and states an error; () otherwise.
+    #[rhai_fn(global, get = "dominant_source", pure)]
+    pub fn dominant_source(e: &mut Estimate) -> Dynamic {
+        e.dominant_source()
+            .map_or(Dynamic::UNIT, |s| Dynamic::from(s.name().to_string()))
     }
 
     /// Value on the main discretisation (0 for a waveform, whose error is relative).
@@ -108,7 +129,7 @@ mod accuracy_api {
         e.observed_order.map_or(Dynamic::UNIT, Dynamic::from)
     }
 
-    /// Values on the two companions, [2h, 4h] or [order p - 1, order p - 2] (waveforms: relative differences [main vs first, first vs second]).
+    /// Values on the refinement's two companions, [2h, 4h] or [order p - 1, order p - 2] (waveforms: relative differences [main vs first, first vs second]).
     #[rhai_fn(global, get = "companions", pure)]
     pub fn companions(e: &mut Estimate) -> Array {
         e.companions.iter().map(|&v| Dynamic::from(v)).collect()

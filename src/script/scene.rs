@@ -200,7 +200,7 @@ mod scene_api {
         ))
     }
 
-    /// The two companions of an error estimate (same laminate draw): on linear triangles the scene at 2x and 4x the element sizes, on spectral elements the same elements at orders order_x - 1 and order_x - 2. Estimate a quantity from its values on the scene and on them with `accuracy::scalar(fine, medium, coarse, scene)`.
+    /// The companions of an error estimate (same laminate draw): on linear triangles the scene at 2x and 4x the element sizes; on spectral elements the same elements at orders order_x - 1 and order_x - 2 along x, then the same elements one order higher across every row. Estimate a quantity from its values on the scene and on them, in this order, with `accuracy::scalar([value, ...], scene)`.
     #[rhai_fn(global, pure, return_raw)]
     pub fn companions(ctx: NativeCallContext, scene: &mut SceneRef) -> Res<Array> {
         scene

@@ -40,8 +40,9 @@ impl Default for EstimateChoice {
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ResponderOptions {
-    /// Repeat every procedure on the scene's two companions (2x and 4x the element sizes on
-    /// triangles, one and two orders lower on spectral elements) and report error estimates
+    /// Repeat every procedure on the scene's companions (2x and 4x the element sizes on
+    /// triangles; on spectral elements one and two orders lower along x and one higher
+    /// across) and report error estimates
     /// (see `accuracy`): true, false, or "auto" (on when the companions cost at most 30% of
     /// the main runs, [`crate::trnews::AUTO_ESTIMATE_MAX_COST`]).
     pub error_estimate: EstimateChoice,
@@ -740,7 +741,7 @@ mod trnews_api {
         Ok(tr.responses[index(&ctx, k, tr.responses.len(), "receiver")?].clone())
     }
 
-    /// A responder with options #{error_estimate, step_fraction}: `step_fraction` sets the time step to that fraction of the scene's dt_crit (default 0.9); with `error_estimate: true` (or "auto" when that costs at most 30% extra) it also builds the scene's two companions (same laminate draw; on triangles 2x and 4x the element sizes, about 1/8 + 1/64 of the cost where every layer coarsens; on spectral elements one and two orders lower along x, about 1.2 times the cost of the quick preset), repeats every procedure on them and attaches error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
+    /// A responder with options #{error_estimate, step_fraction}: `step_fraction` sets the time step to that fraction of the scene's dt_crit (default 0.9); with `error_estimate: true` (or "auto" when that costs at most 30% extra) it also builds the scene's companions (same laminate draw; on triangles 2x and 4x the element sizes, about 1/8 + 1/64 of the cost where every layer coarsens; on spectral elements one and two orders lower along x and one order higher across every row, which see the error along x and across the layers; `r.companion_cost` states their cost), repeats every procedure on them and attaches error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
     #[rhai_fn(name = "responder", return_raw)]
     pub fn responder_with(
         ctx: NativeCallContext,

@@ -14,8 +14,9 @@ use serde::{Deserialize, Serialize};
 /// per row an order across chosen by [`SemModel::layered`]: at least `min_order_y` (the
 /// accuracy floor: a thin epoxy layer at order 1 is one linear interval, and the presets'
 /// 3.4% error at normal incidence was almost all that), and above it the highest order up to
-/// `max_order_y` that does not shorten the time step. Horizontal element edges carry only
-/// x-direction points: still conforming.
+/// `max_order_y` that does not shorten the time step; then `extra_order_y` more on every row
+/// (the error estimate's companion that refines across the layers). Horizontal element edges
+/// carry only x-direction points: still conforming.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SemSpec {
@@ -25,6 +26,12 @@ pub struct SemSpec {
     pub min_order_y: usize,
     /// Highest polynomial order across an element row.
     pub max_order_y: usize,
+    /// Orders added across every row after the rule chose them: 0 for a scene; 1 for the
+    /// error estimate's companion across the layers, which has each row's order one higher
+    /// than the scene it estimates (the rule alone would keep the plies at the step's
+    /// ceiling).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub extra_order_y: usize,
     /// Element width along x (m); the width is divided into equal elements no wider.
     pub element_size_x_m: f64,
     /// Largest element height across a layer (m).
@@ -39,10 +46,15 @@ impl Default for SemSpec {
             order_x: 4,
             min_order_y: 1,
             max_order_y: 4,
+            extra_order_y: 0,
             element_size_x_m: 0.5e-3,
             element_size_y_m: 0.25e-3,
         }
     }
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// Relative slack of the gap comparison: a row as tall as the elements are wide takes the order
@@ -113,7 +125,9 @@ impl SemModel {
         let order_y: Vec<usize> = rows_m
             .windows(2)
             .zip(&row_material)
-            .map(|(w, &m)| order_across(w[1] - w[0], speeds[m][1], x_crossing_s, spec))
+            .map(|(w, &m)| {
+                order_across(w[1] - w[0], speeds[m][1], x_crossing_s, spec) + spec.extra_order_y
+            })
             .collect();
         SemModel::new(
             columns_m,

@@ -851,6 +851,7 @@ fn round_off_does_not_change_the_order_across() {
         order_x: 7,
         min_order_y: 1,
         max_order_y: 7,
+        extra_order_y: 0,
         element_size_x_m: 0.5e-3,
         element_size_y_m: 0.5e-3,
     };
@@ -879,6 +880,7 @@ fn the_order_across_is_judged_per_material_above_a_floor() {
             order_x: 6,
             min_order_y,
             max_order_y: 6,
+            extra_order_y: 0,
             element_size_x_m: 0.25e-3,
             element_size_y_m: 0.25e-3,
         };

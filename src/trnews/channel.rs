@@ -63,15 +63,16 @@ pub struct Response {
 /// response, or recorded responses.
 ///
 /// With an error estimate ([`Responder::with_companions`], simulated scenes only) it also
-/// holds companions on the same scene with 2x and 4x the element sizes, and every procedure
-/// below repeats itself on them and reports Richardson estimates of its results (see
+/// holds the scene's companions ([`crate::scene::SceneSpec::companions`]: 2x and 4x the element
+/// sizes; on spectral elements one and two orders lower along x and one order higher across),
+/// and every procedure below repeats itself on them and reports estimates of its results (see
 /// [`crate::accuracy`]).
 #[derive(Clone, Debug)]
 pub struct Responder {
     channel: Channel,
     pub(super) dt_s: f64,
-    /// Companions with 2x and 4x the element sizes (one and two orders lower on spectral
-    /// elements); empty without an error estimate.
+    /// The scene's companions in [`crate::scene::SceneSpec::companions`]'s order; empty
+    /// without an error estimate.
     pub(super) companions: Vec<Responder>,
 }
 
@@ -427,12 +428,13 @@ impl Responder {
     }
 
     /// The scenes of an error estimate's companions ([`SceneSpec::companions`]: on linear
-    /// triangles 2x and 4x the element sizes, on spectral elements one and two orders lower),
-    /// each with its own stable step, and their run time relative to this responder's from
-    /// DOFs x steps, sum over companions of (DOFs_c / DOFs) (dt / dt_c). On triangles about
-    /// 1/8 + 1/64 where every layer coarsens, more where thin layers keep one element row or
-    /// set the step; on the quick preset's spectral elements about 1.2. Building
-    /// them runs no simulation.
+    /// triangles 2x and 4x the element sizes, on spectral elements one and two orders lower
+    /// along x and one higher across), each with its own stable step, and their run time
+    /// relative to this responder's from DOFs x steps, sum over companions of (DOFs_c / DOFs)
+    /// (dt / dt_c). On triangles about 1/8 + 1/64 where every layer coarsens, more where thin
+    /// layers keep one element row or set the step; on spectral elements the companion across
+    /// costs the most (a higher order across shortens the step). Building them runs no
+    /// simulation.
     pub fn companion_scenes(&self) -> Result<(Vec<Arc<Scene>>, f64)> {
         let scene = self.scene()?;
         let scenes = scene
@@ -492,7 +494,7 @@ impl Responder {
         Ok(self)
     }
 
-    /// The companions of the error estimate (2h, 4h), empty without one.
+    /// The companions of the error estimate, empty without one.
     pub fn companions(&self) -> &[Responder] {
         &self.companions
     }

@@ -72,9 +72,9 @@ pub fn delayed_tr_news_within(
     max_delay_s: f64,
 ) -> Result<Vec<Delayed>> {
     let mut main = delayed_once(responder, tr, focus, points, half_window_s, max_delay_s)?;
-    let ([rm, rc], [tm, tc]) = (&responder.companions[..], &tr.companions[..]) else {
+    if responder.companions.is_empty() {
         return Ok(main);
-    };
+    }
     let on = |r: &Responder, t: &TrNews| -> Result<Vec<Delayed>> {
         let f = t
             .focus
@@ -83,25 +83,28 @@ pub fn delayed_tr_news_within(
             .ok_or_else(|| Error::invalid("receiver", focus.receiver, "has no companion focus"))?;
         delayed_once(r, t, f, points, half_window_s, max_delay_s)
     };
-    let (medium, coarse) = (on(rm, tm)?, on(rc, tc)?);
+    let companions = responder
+        .companions
+        .iter()
+        .zip(&tr.companions)
+        .map(|(r, t)| on(r, t))
+        .collect::<Result<Vec<_>>>()?;
     let refinement = responder.refinement()?;
-    for ((d, m), c) in main.iter_mut().zip(&medium).zip(&coarse) {
-        d.estimates = Some(DelayedEstimates {
-            misfit: Estimate::dimensionless(d.misfit, m.misfit, c.misfit, refinement),
-            peak_difference: Estimate::dimensionless(
-                d.peak_difference,
-                m.peak_difference,
-                c.peak_difference,
-                refinement,
-            ),
-            simulation: Estimate::waveform(
-                &d.simulation,
-                &m.simulation,
-                &c.simulation,
-                d.window_s,
+    for (k, d) in main.iter_mut().enumerate() {
+        let runs: Vec<&Delayed> = std::iter::once(&*d)
+            .chain(companions.iter().map(|c| &c[k]))
+            .collect();
+        let values = |q: fn(&Delayed) -> f64| -> Vec<f64> { runs.iter().map(|x| q(x)).collect() };
+        let simulations: Vec<&Signal> = runs.iter().map(|x| &x.simulation).collect();
+        let estimates = DelayedEstimates {
+            misfit: Estimate::dimensionless_of(&values(|x| x.misfit), refinement)?,
+            peak_difference: Estimate::dimensionless_of(
+                &values(|x| x.peak_difference),
                 refinement,
             )?,
-        });
+            simulation: Estimate::waveform_of(&simulations, d.window_s, refinement)?,
+        };
+        d.estimates = Some(estimates);
     }
     Ok(main)
 }

@@ -112,7 +112,7 @@ pub struct TrNews {
     pub focus: Vec<Focus>,
     /// Report of the chirp run (None when convolved).
     pub chirp_report: Option<RunReport>,
-    /// The same procedure on the error estimate's companions (2h, 4h), if any; a companion
+    /// The same procedure on the error estimate's companions, if any; a companion
     /// has none of its own.
     #[serde(deserialize_with = "companions_one_level")]
     pub companions: Vec<TrNews>,
@@ -251,10 +251,11 @@ fn tr_news_computed(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> 
         .iter()
         .map(|c| tr_news_once(c, spec))
         .collect::<Result<_>>()?;
-    if let [medium, coarse] = &main.companions[..] {
+    if !main.companions.is_empty() {
         let refinement = responder.refinement()?;
+        let runs: Vec<&TrNews> = std::iter::once(&main).chain(&main.companions).collect();
         let estimates = (0..main.focus.len())
-            .map(|i| focus_estimates(&main, medium, coarse, i, refinement))
+            .map(|i| focus_estimates(&runs, i, refinement))
             .collect::<Result<Vec<_>>>()?;
         for (f, e) in main.focus.iter_mut().zip(estimates) {
             f.estimates = Some(e);
@@ -263,51 +264,34 @@ fn tr_news_computed(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> 
     Ok(main)
 }
 
-/// The estimates of focus `i` from the main run and its two companions.
-fn focus_estimates(
-    fine: &TrNews,
-    medium: &TrNews,
-    coarse: &TrNews,
-    i: usize,
-    refinement: Refinement,
-) -> Result<FocusEstimates> {
-    let f = [&fine.focus[i], &medium.focus[i], &coarse.focus[i]];
-    let scalar =
-        |q: &dyn Fn(&Focus) -> f64| Estimate::scalar(q(f[0]), q(f[1]), q(f[2]), refinement);
-    let spec = &fine.spec;
+/// The estimates of focus `i` from the main run and its companions, `runs` in the order
+/// [`crate::scene::SceneSpec::companions`] gives them.
+fn focus_estimates(runs: &[&TrNews], i: usize, refinement: Refinement) -> Result<FocusEstimates> {
+    let f: Vec<&Focus> = runs.iter().map(|t| &t.focus[i]).collect();
+    let values = |q: &dyn Fn(&Focus) -> f64| -> Vec<f64> { f.iter().map(|x| q(x)).collect() };
+    let scalar = |q: &dyn Fn(&Focus) -> f64| Estimate::scalar_of(&values(q), refinement);
+    let spec = &runs[0].spec;
     let r = f[0].receiver - 1;
     let focus_window = (
         spec.window_s - spec.after_focus_s,
         spec.window_s + spec.after_focus_s,
     );
+    let responses: Vec<&Signal> = runs.iter().map(|t| &t.responses[r]).collect();
+    let focused: Vec<&Signal> = f.iter().map(|x| &x.focused).collect();
+    let pi_residuals: Option<Vec<f64>> = f.iter().map(|x| x.pi_residual()).collect();
     Ok(FocusEstimates {
-        response: Estimate::waveform(
-            &fine.responses[r],
-            &medium.responses[r],
-            &coarse.responses[r],
-            (0.0, spec.record_s),
+        response: Estimate::waveform_of(&responses, (0.0, spec.record_s), refinement)?,
+        focused: Estimate::waveform_of(&focused, focus_window, refinement)?,
+        peak_amplitude: scalar(&|x| x.peak.amplitude)?,
+        peak_time_s: scalar(&|x| x.peak.time_s)?,
+        side_lobe_asymmetry: Estimate::dimensionless_of(
+            &values(&|x| x.side_lobes.asymmetry),
             refinement,
         )?,
-        focused: Estimate::waveform(
-            &f[0].focused,
-            &f[1].focused,
-            &f[2].focused,
-            focus_window,
-            refinement,
-        )?,
-        peak_amplitude: scalar(&|x| x.peak.amplitude),
-        peak_time_s: scalar(&|x| x.peak.time_s),
-        side_lobe_asymmetry: Estimate::dimensionless(
-            f[0].side_lobes.asymmetry,
-            f[1].side_lobes.asymmetry,
-            f[2].side_lobes.asymmetry,
-            refinement,
-        ),
-        main_to_side_db: scalar(&|x| x.side_lobes.main_to_side_db),
-        pi_residual: match f.map(Focus::pi_residual) {
-            [Some(a), Some(b), Some(c)] => Some(Estimate::dimensionless(a, b, c, refinement)),
-            _ => None,
-        },
+        main_to_side_db: scalar(&|x| x.side_lobes.main_to_side_db)?,
+        pi_residual: pi_residuals
+            .map(|v| Estimate::dimensionless_of(&v, refinement))
+            .transpose()?,
     })
 }
 

@@ -42,15 +42,19 @@ pub fn pulse_inversion(
     duration_s: f64,
 ) -> Result<PulseInversion> {
     let mut main = pulse_inversion_once(responder, s, duration_s)?;
-    if let [medium, coarse] = &responder.companions[..] {
-        let fine = main.residuals();
-        let m = pulse_inversion_once(medium, s, duration_s)?.residuals();
-        let c = pulse_inversion_once(coarse, s, duration_s)?.residuals();
+    if !responder.companions.is_empty() {
+        let mut runs = vec![main.residuals()];
+        for c in &responder.companions {
+            runs.push(pulse_inversion_once(c, s, duration_s)?.residuals());
+        }
         let refinement = responder.refinement()?;
         main.residual_estimates = Some(
-            (0..fine.len())
-                .map(|k| Estimate::dimensionless(fine[k], m[k], c[k], refinement))
-                .collect(),
+            (0..runs[0].len())
+                .map(|k| {
+                    let values: Vec<f64> = runs.iter().map(|r| r[k]).collect();
+                    Estimate::dimensionless_of(&values, refinement)
+                })
+                .collect::<Result<_>>()?,
         );
     }
     Ok(main)

@@ -211,6 +211,7 @@ impl WaveStrip {
             order_x: order,
             min_order_y: 1,
             max_order_y: order,
+            extra_order_y: 0,
             element_size_x_m: width,
             element_size_y_m: width,
         };
