@@ -7,6 +7,8 @@ use crate::material::Material;
 use crate::signal::{causal_response, Signal};
 use rustfft::num_complex::Complex64;
 
+pub mod oblique;
+
 /// A standing mode of an orthotropic box with rollers on every edge (u_n = 0, no shear
 /// traction): u_x = A sin(kx x) cos(ky y), u_y = B cos(kx x) sin(ky y) times cos(omega t),
 /// exact for kx = m pi / width, ky = n pi / height, with (A, B) the unit eigenvector of the
