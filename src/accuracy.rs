@@ -566,8 +566,9 @@ mod tests {
         assert_eq!(e.dominant_source(), Some(Source::Across));
         let text = e.describe();
         assert!(text.contains("across the layers dominant"), "{text}");
-        let small = Estimate::scalar_of(&[q(7), q(6), q(5), q(7) + 0.1 * along], Refinement::Orders)
-            .unwrap();
+        let small =
+            Estimate::scalar_of(&[q(7), q(6), q(5), q(7) + 0.1 * along], Refinement::Orders)
+                .unwrap();
         assert_eq!(small.dominant_source(), Some(Source::Refinement));
         // Three values: no companion across, nothing separated.
         let three = Estimate::scalar_of(&values[..3], Refinement::Orders).unwrap();
@@ -579,14 +580,14 @@ mod tests {
     #[test]
     fn where_the_companions_along_x_agree_the_error_across_is_the_error() {
         // Normal incidence: the solution does not vary along x.
-        let e = Estimate::dimensionless_of(&[0.5, 0.5, 0.5, 0.5 + 2e-4], Refinement::Orders)
-            .unwrap();
+        let e =
+            Estimate::dimensionless_of(&[0.5, 0.5, 0.5, 0.5 + 2e-4], Refinement::Orders).unwrap();
         assert_eq!(e.verdict, Verdict::Reliable);
         assert!((e.error.unwrap() - 2e-4).abs() < 1e-15);
         assert_eq!(e.dominant_source(), Some(Source::Across));
         // Round-off across as well: mesh-independent.
-        let same = Estimate::dimensionless_of(&[0.5, 0.5, 0.5, 0.5 + 1e-14], Refinement::Orders)
-            .unwrap();
+        let same =
+            Estimate::dimensionless_of(&[0.5, 0.5, 0.5, 0.5 + 1e-14], Refinement::Orders).unwrap();
         assert_eq!(same.verdict, Verdict::MeshIndependent);
         // A "refine" along x stays one: no error is claimed.
         let refine = Estimate::scalar_of(&[1.0, 1.2, 1.0, 1.1], Refinement::Orders).unwrap();
@@ -597,10 +598,17 @@ mod tests {
     #[test]
     fn a_waveforms_error_across_is_its_relative_l2_difference() {
         let dt = 1e-9;
-        let wave = |a: f64| Signal::new(dt, 0.0, (0..100).map(|k| a * (k as f64 * 0.1).sin()).collect()).unwrap();
+        let wave = |a: f64| {
+            Signal::new(
+                dt,
+                0.0,
+                (0..100).map(|k| a * (k as f64 * 0.1).sin()).collect(),
+            )
+            .unwrap()
+        };
         let (f, across) = (wave(1.0), wave(1.01));
-        let e = Estimate::waveform_of(&[&f, &f, &f, &across], (0.0, 1e-7), Refinement::Orders)
-            .unwrap();
+        let e =
+            Estimate::waveform_of(&[&f, &f, &f, &across], (0.0, 1e-7), Refinement::Orders).unwrap();
         assert!((e.error.unwrap() - 0.01).abs() < 1e-12, "{e:?}");
         assert_eq!(e.brief(), "err 1.0% (mostly across)");
         // With an error along x too, the two add in quadrature.
@@ -610,8 +618,8 @@ mod tests {
         };
         let (f, m, c) = (shifted(0.0), shifted(0.01), shifted(0.03));
         let along = Estimate::waveform(&f, &m, &c, (0.0, 1e-7), Refinement::Orders).unwrap();
-        let both = Estimate::waveform_of(&[&f, &m, &c, &across], (0.0, 1e-7), Refinement::Orders)
-            .unwrap();
+        let both =
+            Estimate::waveform_of(&[&f, &m, &c, &across], (0.0, 1e-7), Refinement::Orders).unwrap();
         let expected = along.error.unwrap().hypot(both.across.unwrap());
         assert!((both.error.unwrap() - expected).abs() < 1e-15, "{both:?}");
     }

@@ -2,9 +2,8 @@
 //! receiver sees it.
 //!
 //! A piezoelectric transducer (or a vibrometer with its band filter) passes a band of
-//! frequencies; outside it the lab sees nothing. The model is a causal analog Butterworth
-//! band-pass B(f) of the stated order (2 x order poles), applied exactly whatever the step
-//! ([`TransducerSpec::transfer`]), once on transmission (the traction the
+//! frequencies; outside it the lab sees nothing. The model is a causal Butterworth band-pass
+//! B(f) of the stated order (2 x order poles), applied once on transmission (the traction the
 //! transmitter exerts is B * drive) and once on reception (the recorded output is B * the
 //! receiver's displacement or velocity). Causal filters are what a transducer is, and they
 //! do not move the TR-NEWS focus: the focused signal's spectrum is |B H B|^2 |C|^2, with no
@@ -15,8 +14,7 @@
 //! output the raw receiver quantity, as in the report.
 
 use crate::error::{Error, Result};
-use crate::signal::{self, Signal};
-use rustfft::num_complex::Complex;
+use crate::signal::{self, FilterKind, Signal};
 use serde::{Deserialize, Serialize};
 
 /// The transducers' band model, shared by the transmitter and the receivers.
@@ -79,32 +77,15 @@ impl TransducerSpec {
         Ok(())
     }
 
-    /// One pass of the band-pass on `s`: the analog filter [`TransducerSpec::transfer`]
-    /// applied exactly ([`signal::causal_response`]). Not its bilinear digital copy: the
-    /// copy's frequency warping depends on the step (6e-5 of a trace between 0.9 and 0.3
-    /// dt_crit), which error estimates that compare runs at different steps would count as a
-    /// discretisation error.
+    /// One pass of the band-pass on `s`.
     fn pass(&self, s: &Signal) -> Result<Signal> {
         self.validate(s.dt_s)?;
-        Ok(signal::causal_response(s, |omega| self.transfer(omega))?)
-    }
-
-    /// The analog Butterworth band-pass at angular frequency `omega` (rad/s; X(omega) =
-    /// int x(t) e^(-i omega t) dt): the low-pass prototype of order n, prod_k 1 / (q - q_k)
-    /// with poles q_k = e^(i pi (2k + n - 1) / (2n)), k = 1..n, at q = (s^2 + w_0^2) / (b s),
-    /// s = i omega, w_0^2 = w_lo w_hi, b = w_hi - w_lo (the band-pass transformation; gain 1
-    /// at w_0, 1/sqrt(2) at w_lo and w_hi). Analytic for Im omega < 0 (causal), where
-    /// [`signal::causal_response`] evaluates it.
-    pub fn transfer(&self, omega: Complex<f64>) -> Complex<f64> {
-        use std::f64::consts::PI;
-        let (w_lo, w_hi) = (2.0 * PI * self.f_lo_hz, 2.0 * PI * self.f_hi_hz);
-        let s = Complex::new(0.0, 1.0) * omega;
-        let q = (s * s + w_lo * w_hi) / (s * (w_hi - w_lo));
-        let n = self.order as f64;
-        (1..=self.order).fold(Complex::new(1.0, 0.0), |h, k| {
-            let pole = Complex::from_polar(1.0, PI * (2.0 * k as f64 + n - 1.0) / (2.0 * n));
-            h / (q - pole)
-        })
+        let sos = signal::butterworth(
+            self.order,
+            FilterKind::BandPass(self.f_lo_hz, self.f_hi_hz),
+            1.0 / s.dt_s,
+        )?;
+        Ok(signal::sosfilt(&sos, s)?)
     }
 
     /// The traction the transmitter exerts for the drive signal `drive` over a run of
@@ -182,47 +163,6 @@ mod tests {
         );
         let low = t.receive(&tone(0.1 * t.f_lo_hz, dt, 50_000)).unwrap();
         assert!(steady(&low) < 0.012, "gain a decade below {}", steady(&low));
-    }
-
-    /// The analog band-pass: gain 1 at the band's centre and 1/sqrt(2) (-3 dB) at its
-    /// edges, to round-off, for every order.
-    #[test]
-    fn transfer_has_unit_gain_at_the_centre_and_half_power_at_the_edges() {
-        for order in 1..=4 {
-            let t = TransducerSpec {
-                order,
-                ..Default::default()
-            };
-            let gain = |f: f64| t.transfer(Complex::new(2.0 * std::f64::consts::PI * f, 0.0)).norm();
-            assert!((gain((t.f_lo_hz * t.f_hi_hz).sqrt()) - 1.0).abs() < 1e-12);
-            for edge in [t.f_lo_hz, t.f_hi_hz] {
-                assert!((gain(edge) - 0.5f64.sqrt()).abs() < 1e-12, "order {order}");
-            }
-        }
-    }
-
-    /// A pass does not depend on the step: a Gaussian pulse's band-passed response at 3 ns,
-    /// resampled to 2 ns, agrees with the response at 2 ns to 5e-6 (measured 1.7e-6; the
-    /// bilinear digital copy of the same filter, which the band was until issue 25: 8.8e-5).
-    #[test]
-    fn a_pass_does_not_depend_on_the_step() {
-        let t = TransducerSpec::default();
-        let pulse = |dt: f64| {
-            let samples = (0..(20e-6 / dt) as usize)
-                .map(|k| (-((k as f64 * dt - 1e-6) / 0.05e-6).powi(2)).exp())
-                .collect();
-            t.receive(&Signal::new(dt, 0.0, samples).unwrap()).unwrap()
-        };
-        let (fine, coarse) = (pulse(2e-9), pulse(3e-9));
-        let on_fine = signal::resample(&coarse, 2e-9).unwrap();
-        let n = 9000;
-        let d = signal::relative_l2(
-            &Signal::new(2e-9, 0.0, on_fine.samples[..n].to_vec()).unwrap(),
-            &Signal::new(2e-9, 0.0, fine.samples[..n].to_vec()).unwrap(),
-            None,
-        )
-        .unwrap();
-        assert!(d < 5e-6, "{d:e}");
     }
 
     #[test]

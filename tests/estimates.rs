@@ -315,7 +315,11 @@ fn along_the_layers(cut: &trnews::sem::SemSpec) -> (Signal, Signal) {
         weights: edge.iter().map(|&(node, w)| (2 * node, w)).collect(),
         signal: transforms.add_to_source(&pressure).unwrap(),
     };
-    let column = m.x_nodes_m.iter().position(|&x| (x - at).abs() < 1e-9).unwrap();
+    let column = m
+        .x_nodes_m
+        .iter()
+        .position(|&x| (x - at).abs() < 1e-9)
+        .unwrap();
     let receiver = Receiver {
         name: "x = 10 mm".into(),
         weights: edge

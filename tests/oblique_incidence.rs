@@ -789,3 +789,59 @@ fn preset_discretisations_against_the_exact_solution() {
         }
     }
 }
+
+/// Issue #25's check of the error estimate at oblique incidence: each preset's strip and the
+/// strips of its companions ([`SceneSpec::companions`]: orders p - 1 and p - 2 along x, then
+/// every row one order higher across), each at 0.9 of its own dt_crit with the step's error
+/// removed, give the estimate of the relative L2 error in band over the record
+/// ([`Estimate::waveform_of`]); issue 25 asks for it within a factor 2 of the true error at
+/// every receiver, v_y and v_x. Not met yet: measured 2.54, 2.20, 5.24, 1.44 on the quick
+/// preset (v_y below 10 / 30 pairs, v_x below 10 / 30) and 8.1, "refine", 12.3, 5.2 on the
+/// paper preset. The companion across sees the error across (quick: 2.0e-3 against a true
+/// 1.8e-3 on v_y below 10 pairs); the companions along x overstate the error along x, since
+/// their longer step lets the rule across lower some rows (and on paper the cap at their
+/// order lowers the plies), so they see an error across of their own. Companions along x
+/// that keep every row (tried: the rule judged by the preset's order along x) meet a floor of
+/// the steps' differences, about 1e-5, above the paper preset's error at normal incidence.
+#[test]
+#[ignore = "issue #25, not met (a few minutes): cargo test --release --test \
+            oblique_incidence -- --ignored error_estimates --nocapture"]
+fn error_estimates_of_the_presets_hold_at_oblique_incidence() {
+    use trnews::accuracy::Estimate;
+    let band = TransducerSpec::default();
+    let mut outside = Vec::new();
+    for resolution in [Resolution::Quick, Resolution::Paper] {
+        let spec = SceneSpec::preset(resolution);
+        let runs: Vec<Run> = std::iter::once(spec.clone())
+            .chain(spec.companions().unwrap())
+            .map(|s| run_against_exact(&s.discretisation.sem_cut(&s).unwrap()))
+            .collect();
+        let truth = runs[0].errors();
+        for (r, (component, depth)) in RECEIVERS.iter().enumerate() {
+            let received: Vec<Signal> = runs
+                .iter()
+                .map(|run| band.receive(&run.traces[r]).unwrap())
+                .collect();
+            let traces: Vec<&Signal> = received.iter().collect();
+            let e = Estimate::waveform_of(&traces, (0.0, DURATION), spec.refinement()).unwrap();
+            let ratio = e.error.map_or(f64::NAN, |x| x / truth[r]);
+            let name = format!(
+                "{resolution:?}, {} below {} pairs",
+                ["v_x", "v_y"][*component],
+                PAIRS_ABOVE[*depth]
+            );
+            println!(
+                "{name}: {} against a true {:.3e}: {ratio:.2}",
+                e.describe(),
+                truth[r]
+            );
+            if !(0.5..=2.0).contains(&ratio) {
+                outside.push(name);
+            }
+        }
+    }
+    assert!(
+        outside.is_empty(),
+        "estimate / error outside 0.5-2: {outside:?}"
+    );
+}

@@ -308,7 +308,10 @@ fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
     for (name, c) in [("order 6", &companions[0]), ("order 5", &companions[1])] {
         let rows = row_orders(c);
         assert_eq!(rows.len(), main.len());
-        assert!(rows.iter().zip(&main).all(|(c, m)| c <= m), "{name} along x");
+        assert!(
+            rows.iter().zip(&main).all(|(c, m)| c <= m),
+            "{name} along x"
+        );
     }
     let raised: Vec<usize> = main.iter().map(|p| p + 1).collect();
     assert_eq!(row_orders(&companions[2]), raised, "one more across");

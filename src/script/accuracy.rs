@@ -89,7 +89,10 @@ mod accuracy_api {
             .into_iter()
             .map(|t| {
                 t.try_cast::<Signal>().ok_or_else(|| {
-                    crate::script::convert::error(&ctx, "accuracy::waveform: traces must be signals")
+                    crate::script::convert::error(
+                        &ctx,
+                        "accuracy::waveform: traces must be signals",
+                    )
                 })
             })
             .collect::<Res<Vec<Signal>>>()?;
