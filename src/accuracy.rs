@@ -24,13 +24,13 @@
 //! at every size, or whose step is set by such a layer, the effective ratio is smaller. That
 //! shows as an observed order away from p, and the verdict says so.
 //!
-//! On spectral elements the two companions are lower along x only, so they do not see the
+//! On spectral elements the two companions are lower along x, so they see little of the
 //! error across the layers. A third companion has every element row one order higher across
 //! (its own, shorter step; [`crate::scene::SceneSpec::companions`]): the difference
 //! d_y = |Q_p - Q_across| from it is the error across of the main run, to within the
 //! companion's own error across, which an order more divides several times (p-enrichment).
 //! The stated error combines the two sources (a waveform's in quadrature, a scalar's as a
-//! sum: [`Estimate::combined`]), and the estimate names the larger as the dominant source
+//! sum), and the estimate names the larger as the dominant source
 //! ([`Estimate::dominant_source`]). On spectral elements the companions along x also lower
 //! some rows' orders across (the rule across keeps each row from shortening the step, and
 //! their step is longer), so "along x" is what they see, part of it across.

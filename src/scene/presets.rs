@@ -178,8 +178,9 @@ impl SceneSpec {
     /// `order_x` - 2 along x, at most that many across (a coarser element would leave the
     /// asymptotic range at once: a halving of h changes an order-7 error by 2^14), then the
     /// companion across the layers: every row one order higher across than this scene's, at
-    /// its own stable step (the companions along x keep the orders across where they can, so
-    /// they do not see the error across).
+    /// its own stable step. The companions along x judge their rows by their own, longer step,
+    /// so some rows fall an order across: they see part of the error across as well
+    /// (docs/src/validation/normal-incidence.md).
     pub fn companions(&self) -> Result<Vec<SceneSpec>> {
         match self.discretisation {
             DiscretisationSpec::T3 => Ok(vec![self.coarsened(2.0)?, self.coarsened(4.0)?]),
