@@ -198,19 +198,7 @@ impl Measured {
 
 /// The pressure on the top at step `dt`: the Gaussian drive through the transducer's band.
 fn pressure(dt: f64) -> Signal {
-    let drive = gaussian(dt, DURATION, 4.0 * WIDTH, WIDTH, 1.0);
-    TransducerSpec::default()
-        .transmit(&drive, DURATION)
-        .unwrap()
-}
-
-/// Relative L2 error of `trace` against `exact`, both through the receiving band, over the
-/// samples they share before `until`.
-fn band_error(trace: &Signal, exact: &Signal, until: f64) -> f64 {
-    let band = TransducerSpec::default();
-    let (a, b) = (band.receive(trace).unwrap(), band.receive(exact).unwrap());
-    let n = ((until / a.dt_s) as usize).min(a.len()).min(b.len());
-    rel_l2(&a.samples[..n], &b.samples[..n])
+    band_pressure(dt, DURATION, WIDTH)
 }
 
 /// Runs `strip` at `step_fraction` of its dt_crit under the pressure pulse, as a scene does

@@ -432,22 +432,9 @@ fn oblique_angles_in_band() {
     );
 }
 
-/// The pressure amplitude p(t) on the top at step `dt`: the Gaussian drive through the
-/// transducer's band.
+/// The pressure on the top at step `dt`: the Gaussian drive through the transducer's band.
 fn pressure(dt: f64) -> Signal {
-    let drive = gaussian(dt, DURATION, 4.0 * DRIVE_WIDTH, DRIVE_WIDTH, 1.0);
-    TransducerSpec::default()
-        .transmit(&drive, DURATION)
-        .unwrap()
-}
-
-/// Relative L2 error of `trace` against `exact`, both through the receiving band, over the
-/// samples they share before `until`.
-fn band_error(trace: &Signal, exact: &Signal, until: f64) -> f64 {
-    let band = TransducerSpec::default();
-    let (a, b) = (band.receive(trace).unwrap(), band.receive(exact).unwrap());
-    let n = ((until / a.dt_s) as usize).min(a.len()).min(b.len());
-    rel_l2(&a.samples[..n], &b.samples[..n])
+    band_pressure(dt, DURATION, DRIVE_WIDTH)
 }
 
 /// Order along x of spectral elements `m`.

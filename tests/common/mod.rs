@@ -373,3 +373,21 @@ pub fn acceleration_after_ramp(v: &Signal) -> f64 {
     let (k1, k2) = (((RAMP + 0.5e-6) / v.dt_s) as usize, v.samples.len() - 1);
     (v.samples[k2] - v.samples[k1]) / ((k2 - k1) as f64 * v.dt_s)
 }
+
+/// The pressure on the top at step `dt` over `duration`: the Gaussian drive
+/// exp(-((t - 4 width) / width)^2) through the default transducer band.
+pub fn band_pressure(dt: f64, duration: f64, width: f64) -> Signal {
+    let drive = gaussian(dt, duration, 4.0 * width, width, 1.0);
+    trnews::transducer::TransducerSpec::default()
+        .transmit(&drive, duration)
+        .unwrap()
+}
+
+/// Relative L2 error of `trace` against `exact`, both through the default receiving band,
+/// over the samples they share before `until`.
+pub fn band_error(trace: &Signal, exact: &Signal, until: f64) -> f64 {
+    let band = trnews::transducer::TransducerSpec::default();
+    let (a, b) = (band.receive(trace).unwrap(), band.receive(exact).unwrap());
+    let n = ((until / a.dt_s) as usize).min(a.len()).min(b.len());
+    rel_l2(&a.samples[..n], &b.samples[..n])
+}
