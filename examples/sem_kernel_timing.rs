@@ -48,6 +48,7 @@ fn main() {
             min_order_y: 1,
             max_order_y: p,
             extra_order_y: 0,
+            rule_order_x: None,
             element_size_x_m: h,
             element_size_y_m: h,
         };

@@ -30,6 +30,7 @@ fn build(
         min_order_y: 1,
         max_order_y: max_y,
         extra_order_y: 0,
+        rule_order_x: None,
         element_size_x_m: hx,
         element_size_y_m: row_m,
     };

@@ -5,7 +5,10 @@
 //! frequencies; outside it the lab sees nothing. The model is a causal Butterworth band-pass
 //! B(f) of the stated order (2 x order poles), applied once on transmission (the traction the
 //! transmitter exerts is B * drive) and once on reception (the recorded output is B * the
-//! receiver's displacement or velocity). Causal filters are what a transducer is, and they
+//! receiver's displacement or velocity). B is the analog filter, stepped exactly between the
+//! samples ([`AnalogBandPass`]), so two runs at different steps see the same band to
+//! O((w dt)^4), not the bilinear transform's O((w dt)^2) warp. Causal filters are what a
+//! transducer is, and they
 //! do not move the TR-NEWS focus: the focused signal's spectrum is |B H B|^2 |C|^2, with no
 //! phase left (H the medium's response, C the chirp's spectrum), so it still focuses at the
 //! end of the lag window.
@@ -14,7 +17,7 @@
 //! output the raw receiver quantity, as in the report.
 
 use crate::error::{Error, Result};
-use crate::signal::{self, FilterKind, Signal};
+use crate::signal::{self, AnalogBandPass, Signal};
 use serde::{Deserialize, Serialize};
 
 /// The transducers' band model, shared by the transmitter and the receivers.
@@ -80,12 +83,8 @@ impl TransducerSpec {
     /// One pass of the band-pass on `s`.
     fn pass(&self, s: &Signal) -> Result<Signal> {
         self.validate(s.dt_s)?;
-        let sos = signal::butterworth(
-            self.order,
-            FilterKind::BandPass(self.f_lo_hz, self.f_hi_hz),
-            1.0 / s.dt_s,
-        )?;
-        Ok(signal::sosfilt(&sos, s)?)
+        let band = AnalogBandPass::new(self.order, self.f_lo_hz, self.f_hi_hz, s.dt_s)?;
+        Ok(band.filter(s))
     }
 
     /// The traction the transmitter exerts for the drive signal `drive` over a run of

@@ -315,6 +315,7 @@ fn sem_errors(order: usize, dt: f64, time_dispersion: Option<TimeDispersionSpec>
             min_order_y: 1,
             max_order_y: order,
             extra_order_y: 0,
+            rule_order_x: None,
         },
         ..spec(H0, EdgeCondition::Roller)
     };

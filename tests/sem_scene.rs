@@ -20,6 +20,7 @@ fn sem(order: usize) -> DiscretisationSpec {
         min_order_y: 1,
         max_order_y: order,
         extra_order_y: 0,
+        rule_order_x: None,
     }
 }
 
@@ -226,6 +227,7 @@ fn bad_sem_scenes_are_errors_naming_the_field() {
                 min_order_y,
                 max_order_y,
                 extra_order_y: 0,
+                rule_order_x: None,
             },
             ..smoke_sem()
         };
@@ -259,11 +261,10 @@ fn bad_sem_scenes_are_errors_naming_the_field() {
 }
 
 /// The companions of a spectral-element scene's error estimate lower the order along x by
-/// one and two on the same elements (and the order across to at most that), then raise every
-/// row's order across by one; they keep the laminate draw, and are refused below order 3
-/// with an error naming the field. On the quick preset the companions along x keep or lower
-/// each row's order across (their longer step lets the rule across keep fewer rows at the
-/// ceiling), and the companion across has each row's order one higher than the preset's.
+/// one and two on the same elements, keeping every row's order across (the rule judged at
+/// the scene's order along x) and the scene's step; then they raise every row's order across
+/// by one, at its own step. They keep the laminate draw, and are refused below order 3 with
+/// an error naming the field. Triangles' companions coarsen the elements, at their own step.
 #[test]
 fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
     use trnews::accuracy::Refinement;
@@ -271,26 +272,33 @@ fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
     use trnews::sem::SemModel;
     let spec = SceneSpec::preset(Resolution::Quick);
     assert_eq!(spec.refinement(), Refinement::Orders);
-    let companions = spec.companions().unwrap();
+    let dt = 3.1e-9;
+    let companions = spec.companions(dt).unwrap();
     let orders: Vec<DiscretisationSpec> = companions
         .iter()
         .map(|c| {
             let same_otherwise = SceneSpec {
                 discretisation: c.discretisation,
+                time_step_s: c.time_step_s,
                 ..spec.clone()
             };
             assert_eq!(*c, same_otherwise);
             c.discretisation
         })
         .collect();
+    let steps: Vec<Option<f64>> = companions.iter().map(|c| c.time_step_s).collect();
+    assert_eq!(steps, [Some(dt), Some(dt), None]);
     let floor = SemPreset::of(Resolution::Quick).min_order_y;
-    let expected: Vec<DiscretisationSpec> = [(6, 0), (5, 0), (7, 1)]
-        .map(|(order_x, extra_order_y)| DiscretisationSpec::Sem {
-            order_x,
-            min_order_y: floor,
-            max_order_y: 4,
-            extra_order_y,
-        })
+    let expected: Vec<DiscretisationSpec> = [(6, 0, Some(7)), (5, 0, Some(7)), (7, 1, None)]
+        .map(
+            |(order_x, extra_order_y, rule_order_x)| DiscretisationSpec::Sem {
+                order_x,
+                min_order_y: floor,
+                max_order_y: 4,
+                extra_order_y,
+                rule_order_x,
+            },
+        )
         .into();
     assert_eq!(orders, expected);
 
@@ -305,14 +313,8 @@ fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
             .row_orders()
     };
     let main = row_orders(&spec);
-    for (name, c) in [("order 6", &companions[0]), ("order 5", &companions[1])] {
-        let rows = row_orders(c);
-        assert_eq!(rows.len(), main.len());
-        assert!(
-            rows.iter().zip(&main).all(|(c, m)| c <= m),
-            "{name} along x"
-        );
-    }
+    assert_eq!(row_orders(&companions[0]), main, "order 6 along x");
+    assert_eq!(row_orders(&companions[1]), main, "order 5 along x");
     let raised: Vec<usize> = main.iter().map(|p| p + 1).collect();
     assert_eq!(row_orders(&companions[2]), raised, "one more across");
 
@@ -320,12 +322,16 @@ fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
         discretisation: sem(4),
         ..spec.clone()
     };
-    assert_eq!(low.companions().unwrap()[1].discretisation, sem(2));
+    let DiscretisationSpec::Sem { order_x, .. } = low.companions(dt).unwrap()[1].discretisation
+    else {
+        panic!("a spectral-element scene's companions are spectral elements")
+    };
+    assert_eq!(order_x, 2);
     let e = SceneSpec {
         discretisation: sem(2),
         ..spec
     }
-    .companions()
+    .companions(dt)
     .unwrap_err()
     .to_string();
     assert!(
@@ -334,9 +340,34 @@ fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
     );
     let t3 = SceneSpec::preset_on(Resolution::Quick, DiscretisationKind::T3);
     assert_eq!(t3.refinement(), Refinement::ElementSizes);
-    let coarse = t3.companions().unwrap();
+    let coarse = t3.companions(dt).unwrap();
     assert_eq!(coarse.len(), 2);
     assert_eq!(coarse[1].element_size_x_m, 4.0 * t3.element_size_x_m);
+    assert!(coarse.iter().all(|c| c.time_step_s.is_none()));
+}
+
+/// A scene's `time_step_s` is the step of its runs, and one above its dt_crit is an error
+/// naming the field and the value.
+#[test]
+fn a_fixed_time_step_is_the_runs_step_and_at_most_dt_crit() {
+    let built = Scene::build(&smoke_sem()).unwrap();
+    let crit = built.stability.dt_crit_s;
+    let fixed = SceneSpec {
+        time_step_s: Some(0.5 * crit),
+        ..smoke_sem()
+    };
+    let scene = Scene::build(&fixed).unwrap();
+    assert_eq!(scene.default_dt_s(), 0.5 * crit);
+    assert_eq!(scene.run_config(1e-6).dt_s, Some(0.5 * crit));
+    let too_long = SceneSpec {
+        time_step_s: Some(1.5 * crit),
+        ..smoke_sem()
+    };
+    let e = Scene::build(&too_long).unwrap_err().to_string();
+    assert!(
+        e.contains("time_step_s") && e.contains(&format!("{}", 1.5 * crit)),
+        "{e}"
+    );
 }
 
 /// Newmark (average acceleration on the assembled K, springs included) on the uncracked SEM

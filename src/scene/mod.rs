@@ -108,6 +108,15 @@ impl Scene {
                  modulus is too small or too large for double precision",
             ));
         }
+        if let Some(dt) = spec.time_step_s {
+            if !(dt.is_finite() && dt > 0.0 && dt <= dt_crit) {
+                return Err(Error::invalid(
+                    "time_step_s",
+                    dt,
+                    format!("must be a positive step at most the scene's dt_crit = {dt_crit:e} s"),
+                ));
+            }
+        }
         Ok(scene)
     }
 
@@ -154,10 +163,12 @@ impl Scene {
         self.spec.contact()
     }
 
-    /// A run configuration for this scene: its contact options and stability estimate.
+    /// A run configuration for this scene: its step when the spec fixes one, its contact
+    /// options and stability estimate.
     pub fn run_config(&self, duration_s: f64) -> RunConfig {
         RunConfig {
             duration_s,
+            dt_s: self.spec.time_step_s,
             contact: self.contact(),
             stability: Some(self.stability),
             ..Default::default()
@@ -317,8 +328,11 @@ impl Scene {
         Ok(out)
     }
 
-    /// The time step runs of this scene use by default ([`STEP_FRACTION`] dt_crit).
+    /// The time step runs of this scene use by default: the spec's `time_step_s`, else
+    /// [`STEP_FRACTION`] dt_crit.
     pub fn default_dt_s(&self) -> f64 {
-        STEP_FRACTION * self.stability.dt_crit_s
+        self.spec
+            .time_step_s
+            .unwrap_or(STEP_FRACTION * self.stability.dt_crit_s)
     }
 }

@@ -99,7 +99,7 @@ pub(super) fn build(spec: &SceneSpec, cut: &SemSpec) -> Result<Scene> {
 }
 
 /// Refuses what spectral-element scenes do not take: a Gmsh mesh, orders outside
-/// 1..=[`MAX_ORDER`] (the extra orders across included) or a lowest order across above the
+/// 1..=[`MAX_ORDER`] (the rule's order along x and the extra orders across included) or a lowest order across above the
 /// highest, a width that is not a positive length.
 fn check_options(spec: &SceneSpec, cut: &SemSpec) -> Result<()> {
     if let Some(g) = &spec.gmsh {
@@ -116,6 +116,10 @@ fn check_options(spec: &SceneSpec, cut: &SemSpec) -> Result<()> {
         ("discretisation.order_x", cut.order_x),
         ("discretisation.min_order_y", cut.min_order_y),
         ("discretisation.max_order_y", cut.max_order_y),
+        (
+            "discretisation.rule_order_x",
+            cut.rule_order_x.unwrap_or(cut.order_x),
+        ),
     ] {
         if !(1..=MAX_ORDER).contains(&order) {
             return Err(Error::invalid(

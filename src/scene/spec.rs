@@ -408,6 +408,12 @@ pub struct SceneSpec {
     /// How the layered rectangle is discretised: linear triangles (default) or spectral
     /// elements, on elements of `element_size_x_m` x at most `element_size_y_m` either way.
     pub discretisation: DiscretisationSpec,
+    /// The time step of the scene's runs (s), at most its dt_crit; `None` (the default):
+    /// [`crate::solve::STEP_FRACTION`] of dt_crit. The error estimate's companions along x on
+    /// spectral elements carry the step of the scene they estimate
+    /// ([`SceneSpec::companions`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_step_s: Option<f64>,
 }
 
 /// The time-dispersion transforms of a scene's runs ([`crate::solve::time_dispersion`]):
@@ -476,8 +482,9 @@ pub enum DiscretisationSpec {
     T3,
     /// Spectral elements ([`crate::sem`]): GLL points of `order_x` along x in every element,
     /// and across each element row at least `min_order_y`, and above it the highest order up
-    /// to `max_order_y` that does not shorten the time step, judged per material, then
-    /// `extra_order_y` more ([`crate::sem::SemSpec`]).
+    /// to `max_order_y` that does not shorten the time step, judged per material (against
+    /// `rule_order_x` along x when given), then `extra_order_y` more
+    /// ([`crate::sem::SemSpec`]).
     Sem {
         /// Polynomial order along x.
         order_x: usize,
@@ -490,6 +497,11 @@ pub enum DiscretisationSpec {
         /// the error estimate's companion across the layers, [`SceneSpec::companions`]).
         #[serde(default, skip_serializing_if = "is_zero")]
         extra_order_y: usize,
+        /// The order along x the rule across judges the rows against (`order_x` when not
+        /// given; the scene's on the error estimate's companions along x, which so keep
+        /// every row's order across).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rule_order_x: Option<usize>,
     },
 }
 
@@ -511,11 +523,13 @@ impl DiscretisationSpec {
                 min_order_y,
                 max_order_y,
                 extra_order_y,
+                rule_order_x,
             } => Some(SemSpec {
                 order_x,
                 min_order_y,
                 max_order_y,
                 extra_order_y,
+                rule_order_x,
                 element_size_x_m: spec.element_size_x_m,
                 element_size_y_m: spec.element_size_y_m,
             }),
@@ -542,6 +556,7 @@ impl Default for SceneSpec {
             fix_bottom_corners: false,
             transducer: Some(TransducerSpec::default()),
             time_dispersion: Some(TimeDispersionSpec::default()),
+            time_step_s: None,
             transmitter: TransmitterSpec::default(),
             sources: vec![],
             receivers: ReceiverSpec::default(),

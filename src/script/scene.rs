@@ -200,12 +200,12 @@ mod scene_api {
         ))
     }
 
-    /// The companions of an error estimate (same laminate draw): on linear triangles the scene at 2x and 4x the element sizes; on spectral elements the same elements at orders order_x - 1 and order_x - 2 along x, then the same elements one order higher across every row. Estimate a quantity from its values on the scene and on them, in this order, with `accuracy::scalar([value, ...], scene)`.
+    /// The companions of an error estimate (same laminate draw): on linear triangles the scene at 2x and 4x the element sizes; on spectral elements the same elements at orders order_x - 1 and order_x - 2 along x (every row's order across and the time step as the scene has them), then the same elements one order higher across every row (at its own step). Estimate a quantity from its values on the scene and on them, in this order, with `accuracy::scalar([value, ...], scene)`.
     #[rhai_fn(global, pure, return_raw)]
     pub fn companions(ctx: NativeCallContext, scene: &mut SceneRef) -> Res<Array> {
         scene
             .spec
-            .companions()
+            .companions(scene.default_dt_s())
             .at(&ctx)?
             .iter()
             .map(|spec| {

@@ -47,15 +47,16 @@ pub struct ResponderOptions {
     /// the main runs, [`crate::trnews::AUTO_ESTIMATE_MAX_COST`]).
     pub error_estimate: EstimateChoice,
     /// The time step as a fraction of the scene's dt_crit, in (0, 1]: below the default 0.9
-    /// to measure or shrink the central-difference time error (O(dt^2)).
-    pub step_fraction: f64,
+    /// to measure or shrink the central-difference time error (O(dt^2)). Not given: the
+    /// scene's step (its `time_step_s`, else 0.9 dt_crit).
+    pub step_fraction: Option<f64>,
 }
 
 impl Default for ResponderOptions {
     fn default() -> Self {
         ResponderOptions {
             error_estimate: EstimateChoice::default(),
-            step_fraction: crate::scene::STEP_FRACTION,
+            step_fraction: None,
         }
     }
 }
@@ -741,7 +742,7 @@ mod trnews_api {
         Ok(tr.responses[index(&ctx, k, tr.responses.len(), "receiver")?].clone())
     }
 
-    /// A responder with options #{error_estimate, step_fraction}: `step_fraction` sets the time step to that fraction of the scene's dt_crit (default 0.9); with `error_estimate: true` (or "auto" when that costs at most 30% extra) it also builds the scene's companions (same laminate draw; on triangles 2x and 4x the element sizes, about 1/8 + 1/64 of the cost where every layer coarsens; on spectral elements one and two orders lower along x and one order higher across every row, which see the error along x and across the layers; `r.companion_cost` states their cost), repeats every procedure on them and attaches error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
+    /// A responder with options #{error_estimate, step_fraction}: `step_fraction` sets the time step to that fraction of the scene's dt_crit (default: the scene's step, its `time_step_s` or 0.9 dt_crit); with `error_estimate: true` (or "auto" when that costs at most 30% extra) it also builds the scene's companions (same laminate draw; on triangles 2x and 4x the element sizes, about 1/8 + 1/64 of the cost where every layer coarsens; on spectral elements one and two orders lower along x and one order higher across every row, which see the error along x and across the layers; `r.companion_cost` states their cost), repeats every procedure on them and attaches error estimates to the results (`focus.estimates`, `point.estimates`, pulse inversion's `residual_estimates`).
     #[rhai_fn(name = "responder", return_raw)]
     pub fn responder_with(
         ctx: NativeCallContext,
@@ -751,16 +752,18 @@ mod trnews_api {
     ) -> Res<Responder> {
         let o: ResponderOptions =
             options(&ctx, settings, &ResponderOptions::default(), "responder")?;
-        if !(o.step_fraction > 0.0 && o.step_fraction <= 1.0) {
-            return Err(super::error(
-                &ctx,
-                format!(
-                    "responder option step_fraction = {}: must be in (0, 1] (dt as a fraction of dt_crit)",
-                    o.step_fraction
-                ),
-            ));
-        }
-        let dt_s = o.step_fraction * scene.stability.dt_crit_s;
+        let dt_s = match o.step_fraction {
+            None => scene.default_dt_s(),
+            Some(f) if f > 0.0 && f <= 1.0 => f * scene.stability.dt_crit_s,
+            Some(f) => {
+                return Err(super::error(
+                    &ctx,
+                    format!(
+                        "responder option step_fraction = {f}: must be in (0, 1] (dt as a fraction of dt_crit)"
+                    ),
+                ))
+            }
+        };
         let r = Responder::with_step(scene, duration_s, dt_s).at(&ctx)?;
         match super::companions_wanted(&ctx, &r, &o.error_estimate)? {
             Some(scenes) => r.with_companions(scenes, duration_s).at(&ctx),

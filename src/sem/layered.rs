@@ -14,7 +14,8 @@ use serde::{Deserialize, Serialize};
 /// per row an order across chosen by [`SemModel::layered`]: at least `min_order_y` (the
 /// accuracy floor: a thin epoxy layer at order 1 is one linear interval, and the presets'
 /// 3.4% error at normal incidence was almost all that), and above it the highest order up to
-/// `max_order_y` that does not shorten the time step; then `extra_order_y` more on every row
+/// `max_order_y` that does not shorten the time step (set by the order along x, or by
+/// `rule_order_x`); then `extra_order_y` more on every row
 /// (the error estimate's companion that refines across the layers). Horizontal element edges
 /// carry only x-direction points: still conforming.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -32,6 +33,11 @@ pub struct SemSpec {
     /// ceiling).
     #[serde(skip_serializing_if = "is_zero")]
     pub extra_order_y: usize,
+    /// The order along x whose smallest gap the rule across judges each row against (`None`:
+    /// `order_x`). The error estimate's companions along x set the scene's order, so they
+    /// keep every row's order across and differ from the scene along x alone.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rule_order_x: Option<usize>,
     /// Element width along x (m); the width is divided into equal elements no wider.
     pub element_size_x_m: f64,
     /// Largest element height across a layer (m).
@@ -47,6 +53,7 @@ impl Default for SemSpec {
             min_order_y: 1,
             max_order_y: 4,
             extra_order_y: 0,
+            rule_order_x: None,
             element_size_x_m: 0.5e-3,
             element_size_y_m: 0.25e-3,
         }
@@ -121,7 +128,8 @@ impl SemModel {
             .iter()
             .map(|&m| speeds[m][0])
             .fold(0.0, f64::max);
-        let x_crossing_s = smallest_gap(width_m / columns as f64, spec.order_x.max(1)) / fastest_x;
+        let rule_order_x = spec.rule_order_x.unwrap_or(spec.order_x).max(1);
+        let x_crossing_s = smallest_gap(width_m / columns as f64, rule_order_x) / fastest_x;
         let order_y: Vec<usize> = rows_m
             .windows(2)
             .zip(&row_material)

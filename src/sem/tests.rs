@@ -852,6 +852,7 @@ fn round_off_does_not_change_the_order_across() {
         min_order_y: 1,
         max_order_y: 7,
         extra_order_y: 0,
+        rule_order_x: None,
         element_size_x_m: 0.5e-3,
         element_size_y_m: 0.5e-3,
     };
@@ -881,6 +882,7 @@ fn the_order_across_is_judged_per_material_above_a_floor() {
             min_order_y,
             max_order_y: 6,
             extra_order_y: 0,
+            rule_order_x: None,
             element_size_x_m: 0.25e-3,
             element_size_y_m: 0.25e-3,
         };

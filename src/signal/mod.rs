@@ -12,6 +12,7 @@
 
 use serde::{Deserialize, Serialize};
 
+mod analog;
 mod chirp;
 mod delay;
 mod fft;
@@ -22,6 +23,7 @@ mod resample;
 mod spectrum;
 mod warp;
 
+pub use analog::AnalogBandPass;
 pub use chirp::{ChirpSpec, REPORT_BAND_HZ};
 pub use delay::{delay, delay_and_sum, time_reverse, time_reverse_to_start};
 pub use fft::{causal_response, convolve, convolve_discrete, xcorr};

@@ -429,7 +429,7 @@ impl Responder {
 
     /// The scenes of an error estimate's companions ([`SceneSpec::companions`]: on linear
     /// triangles 2x and 4x the element sizes, on spectral elements one and two orders lower
-    /// along x and one higher across), each with its own stable step, and their run time
+    /// along x at this responder's step and one higher across), and their run time
     /// relative to this responder's from DOFs x steps, sum over companions of (DOFs_c / DOFs)
     /// (dt / dt_c). On triangles about 1/8 + 1/64 where every layer coarsens, more where thin
     /// layers keep one element row or set the step; on spectral elements the companion across
@@ -439,7 +439,7 @@ impl Responder {
         let scene = self.scene()?;
         let scenes = scene
             .spec
-            .companions()?
+            .companions(self.dt_s)?
             .iter()
             .map(|spec| Ok(Arc::new(Scene::build(spec)?)))
             .collect::<Result<Vec<_>>>()?;

@@ -212,6 +212,7 @@ impl WaveStrip {
             min_order_y: 1,
             max_order_y: order,
             extra_order_y: 0,
+            rule_order_x: None,
             element_size_x_m: width,
             element_size_y_m: width,
         };
