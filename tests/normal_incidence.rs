@@ -477,7 +477,9 @@ fn strip_of_spec(spec: &SceneSpec) -> WaveStrip {
 /// L2 error in band over the record ([`Estimate::waveform_of`]); it is within a factor 2 of
 /// the true error against the exact solution at both receivers. The solution does not vary
 /// along x, so the companions along x agree with the preset and the error is the one across
-/// the layers, which the companion across sees.
+/// the layers, which the companion across sees. Measured: quick 1.02, 0.97, paper 0.91, 0.91
+/// (the difference to the companion across alone 0.64-0.72: the companion has a third of the
+/// preset's error; the estimate states sqrt(2) times it).
 #[test]
 fn error_estimates_of_the_presets_hold_at_normal_incidence() {
     let band = TransducerSpec::default();

@@ -101,10 +101,16 @@ mod accuracy_api {
         Estimate::waveform_of(&traces, (t_start_s, t_end_s), refinement).at(&ctx)
     }
 
-    /// The error across the layers |Q - Q_across| (waveforms: relative L2) from the companion one order higher across, included in `error`; () without that companion.
+    /// The difference |Q - Q_across| (waveforms: relative L2) to the companion one order higher across; () without that companion.
     #[rhai_fn(global, get = "across", pure)]
     pub fn across(e: &mut Estimate) -> Dynamic {
         e.across.map_or(Dynamic::UNIT, Dynamic::from)
+    }
+
+    /// The error across the layers, sqrt(2) times `across` (between 1 and 2 times it when an order across at least halves the error), included in `error`; () without the companion across.
+    #[rhai_fn(global, get = "across_error", pure)]
+    pub fn across_error(e: &mut Estimate) -> Dynamic {
+        e.across_error().map_or(Dynamic::UNIT, Dynamic::from)
     }
 
     /// The larger source of the error, "along x" or "across the layers", when the estimate has a companion across and states an error; () otherwise.
