@@ -13,8 +13,8 @@ use crate::scene::{DiscretisationSpec, Scene, SceneSpec};
 use crate::sem::SemModel;
 use crate::signal::Signal;
 use crate::solve::{
-    run, run_central_difference_on, segment_receiver, traction_source, Integrator, Quantity,
-    Receiver, RunConfig, RunReport, Source,
+    run, run_on, segment_receiver, traction_source, Integrator, Quantity, Receiver, RunConfig,
+    RunReport, Source,
 };
 use crate::trnews::{Responder, TrNewsSpec};
 use serde::{Deserialize, Serialize};
@@ -360,7 +360,7 @@ fn sem_point(
         duration_s: wave.duration_s,
         ..Default::default()
     };
-    let out = run_central_difference_on(&model, dt_crit, &[source], &[receiver], &config)?;
+    let out = run_on(&model, dt_crit, &[source], &[receiver], &config)?;
     let error = wave.error(&out.traces[0], spec.depth_m);
     Ok(point("sem", order, "explicit", h, error, out.report))
 }

@@ -8,8 +8,7 @@ use trnews::material::{Material, Orthotropic, Plane};
 use trnews::sem::SemModel;
 use trnews::signal::Signal;
 use trnews::solve::{
-    drive, run_central_difference_on, run_newmark_on, Newmark, NewmarkBody, RunConfig,
-    SampledSources, Stepper,
+    drive, run_on, Integrator, Newmark, NewmarkBody, RunConfig, SampledSources, Stepper,
 };
 use trnews::study::{sem_dt_crit, sem_plane_wave_io, sem_plane_wave_strip};
 
@@ -87,7 +86,6 @@ fn newmark_on_spectral_elements_conserves_energy_exactly_without_damping() {
     for &d in &m.fixed_dofs {
         u0[d] = 0.0;
     }
-    let k = m.assemble_stiffness();
     let dt_crit = sem_dt_crit(&m);
     let dt = 4.0 * dt_crit;
     let config = RunConfig {
@@ -96,10 +94,12 @@ fn newmark_on_spectral_elements_conserves_energy_exactly_without_damping() {
         initial_displacement: Some(u0),
         ledger_every: 1,
         progress: false,
+        integrator: Integrator::Newmark {
+            consistent_mass: false,
+        },
         ..Default::default()
     };
-    let body = NewmarkBody::sem(&m, &k).unwrap();
-    let out = run_newmark_on(body, dt_crit, &[], &[], &config).unwrap();
+    let out = run_on(&m, dt_crit, &[], &[], &config).unwrap();
     assert_eq!(out.report.steps, 2000);
     assert!(out.report.integrator.contains("Newmark"));
     let e0 = out.ledger.initial_j;
@@ -172,20 +172,21 @@ fn plane_wave_trace(dt: f64, newmark: bool) -> Vec<f64> {
             .collect(),
     };
     let (source, receiver) = sem_plane_wave_io(&m, 2e-3, load).unwrap();
+    let integrator = if newmark {
+        Integrator::Newmark {
+            consistent_mass: false,
+        }
+    } else {
+        Integrator::Explicit
+    };
     let config = RunConfig {
         dt_s: Some(dt),
         duration_s: duration,
         progress: false,
+        integrator,
         ..Default::default()
     };
-    let (sources, receivers) = (&[source], &[receiver]);
-    let out = if newmark {
-        let k = m.assemble_stiffness();
-        let body = NewmarkBody::sem(&m, &k).unwrap();
-        run_newmark_on(body, dt_crit, sources, receivers, &config).unwrap()
-    } else {
-        run_central_difference_on(&m, dt_crit, sources, receivers, &config).unwrap()
-    };
+    let out = run_on(&m, dt_crit, &[source], &[receiver], &config).unwrap();
     assert!(out.report.energy_residual_peak < 1e-6, "{:?}", out.report);
     out.traces[0].samples.clone()
 }
@@ -224,7 +225,7 @@ fn a_body_put_together_by_hand_is_checked() {
     let dt = 1e-9;
     let sources = || SampledSources::new(&[], dt, 2).unwrap();
     let body = |dashpots, fixed_dofs, mass| NewmarkBody {
-        stiffness: &k,
+        stiffness: std::borrow::Cow::Borrowed(&k),
         mass: trnews::solve::newmark::Mass::Lumped(mass),
         dashpots,
         fixed_dofs,

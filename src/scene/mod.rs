@@ -302,12 +302,12 @@ impl Scene {
         };
         let out = match &self.body {
             Body::T3(model) => solve::run(model, &[source], &self.receivers, &config)?,
-            Body::Sem { model, .. } => sem::run(
+            Body::Sem { model, .. } => solve::run_on(
                 model,
+                stability.dt_crit_s,
                 &[source],
                 &self.receivers,
                 &config,
-                stability.dt_crit_s,
             )?,
         };
         let drive_max = traction.max_abs();

@@ -13,9 +13,7 @@ use crate::error::{require_positive, Error, Result};
 use crate::fem::AbsorbingEdge;
 use crate::mesh::{Crack, Grid, Mesh, Side};
 use crate::sem::{SemModel, SemSpec, MAX_ORDER};
-use crate::solve::{
-    self, Integrator, Quantity, Receiver, RunConfig, RunOutput, Source, StabilityEstimate,
-};
+use crate::solve::{Quantity, Receiver, StabilityEstimate};
 
 /// The scene on spectral elements cut as `cut` says (see
 /// [`super::DiscretisationSpec::Sem`]).
@@ -99,8 +97,8 @@ pub(super) fn build(spec: &SceneSpec, cut: &SemSpec) -> Result<Scene> {
 }
 
 /// Refuses what spectral-element scenes do not take: a Gmsh mesh, orders outside
-/// 1..=[`MAX_ORDER`] (the rule's order along x and the extra orders across included) or a lowest order across above the
-/// highest, a width that is not a positive length.
+/// 1..=[`MAX_ORDER`] (the rule's order along x and the extra orders across included) or a
+/// lowest order across above the highest, a width that is not a positive length.
 fn check_options(spec: &SceneSpec, cut: &SemSpec) -> Result<()> {
     if let Some(g) = &spec.gmsh {
         return Err(Error::invalid(
@@ -200,35 +198,6 @@ fn stability(model: &SemModel) -> StabilityEstimate {
         dt_crit_s: 2.0 / lambda.sqrt(),
         dt_element_bound_s: 2.0 / model.element_eigenvalue_bound().sqrt(),
         iterations,
-    }
-}
-
-/// Runs a spectral-element scene's model: central differences (the integrator of every
-/// scene) or Newmark on its assembled stiffness (for verification).
-pub(super) fn run(
-    model: &SemModel,
-    sources: &[Source],
-    receivers: &[Receiver],
-    config: &RunConfig,
-    dt_crit_s: f64,
-) -> Result<RunOutput> {
-    match config.integrator {
-        Integrator::Explicit | Integrator::FourthOrder => {
-            solve::run_central_difference_on(model, dt_crit_s, sources, receivers, config)
-        }
-        Integrator::Newmark { consistent_mass } => {
-            if consistent_mass {
-                return Err(Error::invalid(
-                    "integrator.consistent_mass",
-                    true,
-                    "spectral elements have the GLL (diagonal) mass only: set consistent_mass: false",
-                ));
-            }
-            solve::refuse_newmark_contact(config, model.crack())?;
-            let stiffness = model.assemble_stiffness();
-            let body = solve::NewmarkBody::sem(model, &stiffness)?;
-            solve::run_newmark_on(body, dt_crit_s, sources, receivers, config)
-        }
     }
 }
 

@@ -7,6 +7,7 @@ use crate::fem::BlockCsr;
 use crate::mesh::Crack;
 use crate::solve::newmark::Mass;
 use crate::solve::{Discretisation, NewmarkBody};
+use std::borrow::Cow;
 
 impl Discretisation for SemModel {
     type Workspace = SemWorkspace;
@@ -50,6 +51,21 @@ impl Discretisation for SemModel {
     ) {
         SemModel::explicit_update(self, a, u_prev, u, u_next, work);
     }
+    /// The GLL (diagonal) mass and the stiffness assembled for the run
+    /// ([`SemModel::assemble_stiffness`]); a consistent mass is refused, naming the field.
+    fn newmark_body(&self, consistent_mass: bool) -> Result<NewmarkBody<'_>> {
+        if consistent_mass {
+            return Err(Error::invalid(
+                "integrator.consistent_mass",
+                true,
+                "spectral elements have the GLL (diagonal) mass only: set consistent_mass: false",
+            ));
+        }
+        Ok(NewmarkBody::with_gll_mass(
+            self,
+            Cow::Owned(self.assemble_stiffness()),
+        ))
+    }
 }
 
 impl<'a> NewmarkBody<'a> {
@@ -63,11 +79,16 @@ impl<'a> NewmarkBody<'a> {
                 format!("is not this model's ({} DOFs)", model.dofs()),
             ));
         }
-        Ok(NewmarkBody {
+        Ok(Self::with_gll_mass(model, Cow::Borrowed(stiffness)))
+    }
+
+    /// `model`'s GLL mass, dashpots and fixed DOFs with `stiffness` (of its size).
+    fn with_gll_mass(model: &'a SemModel, stiffness: Cow<'a, BlockCsr>) -> Self {
+        NewmarkBody {
             stiffness,
             mass: Mass::Lumped(&model.lumped_mass),
             dashpots: &model.dashpots,
             fixed_dofs: &model.fixed_dofs,
-        })
+        }
     }
 }

@@ -385,7 +385,7 @@ fn side_load_integrates_over_any_part_of_a_side() {
 /// energy, so what remains is the source-work quadrature and round-off), as for T3.
 #[test]
 fn energy_balance_closes_on_a_closed_box() {
-    use crate::solve::{run_central_difference_on, RunConfig, Source};
+    use crate::solve::{run_on, RunConfig, Source};
     let (m, free) = roller_box(5);
     let dt_crit = 2.0 / m.max_eigenvalue(&free).0.sqrt();
     let dt = 0.9 * dt_crit;
@@ -410,7 +410,7 @@ fn energy_balance_closes_on_a_closed_box() {
         progress: false,
         ..Default::default()
     };
-    let out = run_central_difference_on(&m, dt_crit, &[source], &[], &config).unwrap();
+    let out = run_on(&m, dt_crit, &[source], &[], &config).unwrap();
     let r = &out.report;
     eprintln!(
         "energy residual peak {:e}, source work {:e} J/m",
@@ -698,14 +698,8 @@ fn check_names_dofs_outside_the_cracked_model() {
     assert!(m.check().unwrap_err().to_string().contains("dashpots"));
     m.dashpots.clear();
     m.fixed_dofs.push(last + 1);
-    let e = crate::solve::run_central_difference_on(
-        &m,
-        1e-9,
-        &[],
-        &[],
-        &crate::solve::RunConfig::default(),
-    )
-    .unwrap_err();
+    let e =
+        crate::solve::run_on(&m, 1e-9, &[], &[], &crate::solve::RunConfig::default()).unwrap_err();
     assert!(e.to_string().contains("fixed_dofs"), "{e}");
 }
 

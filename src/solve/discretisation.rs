@@ -4,7 +4,8 @@
 //! steppers are generic over it, so linear triangles ([`Fem`]) and spectral elements
 //! ([`crate::sem::SemModel`], which implements it beside its model) run through the same loop.
 
-use crate::error::Result;
+use super::NewmarkBody;
+use crate::error::{Error, Result};
 use crate::fem::{Model, StiffnessOperator};
 use crate::mesh::Crack;
 use rayon::prelude::*;
@@ -44,6 +45,19 @@ pub trait Discretisation: Sync {
     /// Number of DOFs.
     fn dofs(&self) -> usize {
         self.lumped_mass().len()
+    }
+
+    /// The assembled body Newmark's implicit step factors (its stiffness, mass, dashpots and
+    /// fixed DOFs), with the consistent mass when `consistent_mass` (an error naming
+    /// `integrator.consistent_mass` where the discretisation has none). By default an error
+    /// naming `integrator`: a discretisation that only applies K u has no matrix to factor.
+    fn newmark_body(&self, _consistent_mass: bool) -> Result<NewmarkBody<'_>> {
+        Err(Error::invalid(
+            "integrator",
+            "newmark",
+            "this discretisation applies its stiffness without assembling it: run it with \
+             the explicit integrator",
+        ))
     }
 
     /// The central-difference predictor u_next = 2 u - u_prev - a .* (K u) (report eq 69 with
@@ -117,6 +131,10 @@ impl Discretisation for Fem<'_> {
     }
     fn crack(&self) -> Option<&Crack> {
         self.model.crack.as_ref()
+    }
+    /// The model's assembled stiffness, with its lumped or (assembled here) consistent mass.
+    fn newmark_body(&self, consistent_mass: bool) -> Result<NewmarkBody<'_>> {
+        NewmarkBody::t3(self.model, consistent_mass)
     }
     fn stiffness_times(&self, u: &[f64], out: &mut [f64], _: &mut ()) {
         self.op.mul(u, out);

@@ -5,9 +5,9 @@
 //! The loop is built from parts a caller can use alone: a [`Discretisation`] (T3 [`Fem`] or
 //! spectral elements), a [`Stepper`] over it ([`CentralDifference`], generic over the
 //! contact law, or [`Newmark`]), [`Observer`]s ([`observers`]) and the one loop [`drive`].
-//! [`run`] assembles the standard run of a T3 model from them, and
-//! [`run_central_difference_on`] the same for any discretisation, [`run_newmark_on`] for any
-//! assembled body ([`NewmarkBody`]: T3 or spectral elements).
+//! [`run_on`] assembles the standard run of any discretisation from them, with the integrator
+//! the run options name (Newmark on the body's own assembled [`NewmarkBody`]), and [`run`]
+//! that of a T3 model.
 
 mod contact_law;
 pub mod discretisation;
@@ -249,35 +249,80 @@ pub struct RunOutput {
     pub ledger: EnergyLedger,
 }
 
-/// Runs the model with the given sources and receivers.
+/// The standard run of a T3 model ([`run_on`] its [`Fem`]) at the critical step of
+/// `config.stability`, estimated here when not given.
 pub fn run(
     model: &Model,
     sources: &[Source],
     receivers: &[Receiver],
     config: &RunConfig,
 ) -> Result<RunOutput> {
+    let setup = Instant::now();
     validate(model.dofs(), sources, receivers, config)?;
+    let stab = config
+        .stability
+        .unwrap_or_else(|| stability::estimate(model));
+    let fem = Fem::new(model);
+    run_validated(&fem, stab.dt_crit_s, (sources, receivers), config, setup)
+}
+
+/// The standard run of any discretisation (linear triangles, spectral elements, or a custom
+/// one) with the integrator `config.integrator` names: central differences, with the body's
+/// crack ([`Discretisation::crack`]) under `config.contact`; the fourth-order step; or
+/// Newmark on the body's assembled stiffness ([`Discretisation::newmark_body`], contact and
+/// periodic edges refused). The same loop, observers, checks and report whatever the body.
+/// `dt_crit_s` is the body's explicit critical step (e.g.
+/// [`crate::sem::SemModel::max_eigenvalue`]); `config.stability` is not used.
+pub fn run_on<D: Discretisation>(
+    body: &D,
+    dt_crit_s: f64,
+    sources: &[Source],
+    receivers: &[Receiver],
+    config: &RunConfig,
+) -> Result<RunOutput> {
+    let setup = Instant::now();
+    body.check()?;
+    validate(body.dofs(), sources, receivers, config)?;
+    run_validated(body, dt_crit_s, (sources, receivers), config, setup)
+}
+
+/// [`run_on`] once the body and the run's options are checked, the clock started at `setup`:
+/// the integrator chosen here, once.
+fn run_validated<D: Discretisation>(
+    body: &D,
+    dt_crit_s: f64,
+    io: (&[Source], &[Receiver]),
+    config: &RunConfig,
+    setup: Instant,
+) -> Result<RunOutput> {
+    let node_x = |node: usize| body.node_x(node);
+    let shape = BodyShape {
+        dofs: body.dofs(),
+        crack: body.crack(),
+        node_x: &node_x,
+    };
     match config.integrator {
         Integrator::Explicit | Integrator::FourthOrder => {
-            run_explicit(model, sources, receivers, config)
+            central_difference(body, shape, dt_crit_s, io, config, setup)
         }
         Integrator::Newmark { consistent_mass } => {
-            if !model.periodic.is_empty() {
+            if !body.periodic_ties().is_empty() {
                 return Err(Error::invalid(
                     "integrator",
                     "newmark",
                     "periodic edges are implemented for the explicit integrator only",
                 ));
             }
-            refuse_newmark_contact(config, model.crack.as_ref())?;
-            run_newmark(model, sources, receivers, config, consistent_mass)
+            refuse_newmark_contact(config, body.crack())?;
+            let assembled = body.newmark_body(consistent_mass)?;
+            newmark(assembled, shape, dt_crit_s, io, config, setup)
         }
     }
 }
 
 /// Refuses Newmark on a body whose crack the run asks to make contact (the contact laws
 /// correct the explicit predictor only).
-pub(crate) fn refuse_newmark_contact(config: &RunConfig, crack: Option<&Crack>) -> Result<()> {
+fn refuse_newmark_contact(config: &RunConfig, crack: Option<&Crack>) -> Result<()> {
     if config.contact.is_some() && crack.is_some() {
         return Err(Error::invalid(
             "integrator",
@@ -568,63 +613,6 @@ fn report(
     }
 }
 
-/// Central differences on a T3 model ([`run_central_difference_on`] with the model's crack).
-fn run_explicit(
-    model: &Model,
-    sources: &[Source],
-    receivers: &[Receiver],
-    config: &RunConfig,
-) -> Result<RunOutput> {
-    let setup = Instant::now();
-    let fem = Fem::new(model);
-    let stab = config
-        .stability
-        .unwrap_or_else(|| stability::estimate(model));
-    explicit_on(&fem, stab.dt_crit_s, (sources, receivers), config, setup)
-}
-
-/// Central differences with lumped mass on any discretisation (spectral elements, or a
-/// custom one), with its crack ([`Discretisation::crack`]) under `config.contact` and the
-/// standard observers: the same loop, checks and report as [`run`] on a T3 model. With
-/// [`Integrator::FourthOrder`] in `config`, the fourth-order scheme instead.
-/// `dt_crit_s` is the body's critical step (e.g.
-/// [`crate::sem::SemModel::max_eigenvalue`]); `config.stability` is not used.
-pub fn run_central_difference_on<D: Discretisation>(
-    body: &D,
-    dt_crit_s: f64,
-    sources: &[Source],
-    receivers: &[Receiver],
-    config: &RunConfig,
-) -> Result<RunOutput> {
-    body.check()?;
-    validate(body.dofs(), sources, receivers, config)?;
-    explicit_on(
-        body,
-        dt_crit_s,
-        (sources, receivers),
-        config,
-        Instant::now(),
-    )
-}
-
-/// The standard explicit run of `body` (its DOFs, crack and node positions as the run's
-/// shape), the clock started at `setup`.
-fn explicit_on<D: Discretisation>(
-    body: &D,
-    dt_crit_s: f64,
-    io: (&[Source], &[Receiver]),
-    config: &RunConfig,
-    setup: Instant,
-) -> Result<RunOutput> {
-    let node_x = |node: usize| body.node_x(node);
-    let shape = BodyShape {
-        dofs: body.dofs(),
-        crack: body.crack(),
-        node_x: &node_x,
-    };
-    central_difference(body, shape, dt_crit_s, io, config, setup)
-}
-
 /// The explicit run: step, steps, the contact law chosen once here (so the loop of a body
 /// without a contacting crack is compiled without contact), the stepper and its observers.
 fn central_difference<D: Discretisation>(
@@ -789,64 +777,6 @@ fn finish_explicit<D: Discretisation, C: ContactLaw>(
     let (contact, series) = stepper.finish().finish(steps, dt).unzip();
     report.contact = contact;
     Ok(observers.output(body, receivers, report, series))
-}
-
-/// Newmark average acceleration on a T3 model with the standard observers.
-fn run_newmark(
-    model: &Model,
-    sources: &[Source],
-    receivers: &[Receiver],
-    config: &RunConfig,
-    consistent_mass: bool,
-) -> Result<RunOutput> {
-    let setup = Instant::now();
-    let stab = config
-        .stability
-        .unwrap_or_else(|| stability::estimate(model));
-    let node_x = |node: usize| model.mesh.nodes[node][0];
-    let shape = BodyShape {
-        dofs: model.dofs(),
-        crack: model.crack.as_ref(),
-        node_x: &node_x,
-    };
-    let body = NewmarkBody::t3(model, consistent_mass)?;
-    newmark(
-        body,
-        shape,
-        stab.dt_crit_s,
-        (sources, receivers),
-        config,
-        setup,
-    )
-}
-
-/// Newmark average acceleration on any assembled body (spectral elements with
-/// [`crate::sem::SemModel::assemble_stiffness`], or a T3 model) without a crack, with the
-/// standard observers: the same loop, checks and report as [`run`] with
-/// [`Integrator::Newmark`]. `config.dt_s` is required; `dt_crit_s` is the body's explicit
-/// critical step, for the report's stability ratio; `config.integrator` and
-/// `config.stability` are not used (the mass is the body's).
-pub fn run_newmark_on(
-    body: NewmarkBody<'_>,
-    dt_crit_s: f64,
-    sources: &[Source],
-    receivers: &[Receiver],
-    config: &RunConfig,
-) -> Result<RunOutput> {
-    validate(body.dofs(), sources, receivers, config)?;
-    let shape = BodyShape {
-        dofs: body.dofs(),
-        crack: None,
-        node_x: &|_| 0.0,
-    };
-    newmark(
-        body,
-        shape,
-        dt_crit_s,
-        (sources, receivers),
-        config,
-        Instant::now(),
-    )
 }
 
 /// The Newmark run: steps, the stepper (one factorisation) and its observers.

@@ -15,6 +15,7 @@ use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
 };
 use faer::sparse::{SparseColMat, Triplet};
+use std::borrow::Cow;
 
 /// The mass operator: lumped (diagonal) or consistent (sparse).
 pub enum Mass<'a> {
@@ -54,10 +55,11 @@ impl Mass<'_> {
 /// What the Newmark scheme needs of a body M u'' + C u' + K u = f: the assembled stiffness,
 /// the mass, the dashpots (diagonal C) and the DOFs held at zero. Built from a T3 model
 /// ([`NewmarkBody::t3`]) or from spectral elements and their assembled stiffness
-/// ([`NewmarkBody::sem`]).
+/// ([`NewmarkBody::sem`]); a discretisation gives its own
+/// ([`super::Discretisation::newmark_body`]).
 pub struct NewmarkBody<'a> {
-    /// The assembled stiffness K.
-    pub stiffness: &'a BlockCsr,
+    /// The assembled stiffness K (the model's, or assembled for the run).
+    pub stiffness: Cow<'a, BlockCsr>,
     /// The mass M.
     pub mass: Mass<'a>,
     /// (DOF, c) of every dashpot.
@@ -75,7 +77,7 @@ impl<'a> NewmarkBody<'a> {
             Mass::Lumped(&model.lumped_mass)
         };
         Ok(NewmarkBody {
-            stiffness: &model.stiffness,
+            stiffness: Cow::Borrowed(&model.stiffness),
             mass,
             dashpots: &model.dashpots,
             fixed_dofs: &model.fixed_dofs,
@@ -191,7 +193,7 @@ fn factor(
 /// consistent mass, or spectral elements): the state (u, v, a), the factored effective matrix
 /// and every buffer allocated once.
 pub struct Newmark<'a> {
-    stiffness: &'a BlockCsr,
+    stiffness: Cow<'a, BlockCsr>,
     mass: Mass<'a>,
     dashpots: &'a [(usize, f64)],
     effective: Factor,

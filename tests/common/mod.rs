@@ -314,7 +314,7 @@ impl WaveStrip {
         match self {
             WaveStrip::T3(model) => trnews::solve::run(model, sources, receivers, config),
             WaveStrip::Sem(m, dt_crit) => {
-                trnews::solve::run_central_difference_on(m, *dt_crit, sources, receivers, config)
+                trnews::solve::run_on(m, *dt_crit, sources, receivers, config)
             }
         }
     }
