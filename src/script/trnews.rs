@@ -37,7 +37,7 @@ impl Default for EstimateChoice {
 }
 
 /// Options of `trnews::responder(scene, duration_s, options)`.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ResponderOptions {
     /// Repeat every procedure on the scene's companions (2x and 4x the element sizes on
@@ -50,15 +50,6 @@ pub struct ResponderOptions {
     /// to measure or shrink the central-difference time error (O(dt^2)). Not given: the
     /// scene's step (its `time_step_s`, else 0.9 dt_crit).
     pub step_fraction: Option<f64>,
-}
-
-impl Default for ResponderOptions {
-    fn default() -> Self {
-        ResponderOptions {
-            error_estimate: EstimateChoice::default(),
-            step_fraction: None,
-        }
-    }
 }
 
 /// The companion scenes of an error estimate when `choice` asks for one
