@@ -9,6 +9,7 @@ use crate::error::{Error, Result};
 use crate::fem::{Model, StiffnessOperator};
 use crate::mesh::Crack;
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// A semi-discrete elastic body M u'' + C u' + K u = f with diagonal M and C.
 pub trait Discretisation: Sync {
@@ -93,20 +94,26 @@ pub trait Discretisation: Sync {
 const UPDATE_CHUNK: usize = 8192;
 
 /// Linear triangles with lumped mass: the [`Model`] and its stiffness operator (matrix-free
-/// stencils on structured meshes, the assembled K elsewhere).
+/// stencils on structured meshes, the assembled K elsewhere), built when a run first applies
+/// K, so that a Newmark run, which factors the assembled K, builds no stencils.
 pub struct Fem<'a> {
     /// The assembled model.
     pub model: &'a Model,
-    op: StiffnessOperator<'a>,
+    op: OnceLock<StiffnessOperator<'a>>,
 }
 
 impl<'a> Fem<'a> {
-    /// The model with its stiffness operator (builds the stencils once).
+    /// The model; its stiffness operator is built when a run first applies K.
     pub fn new(model: &'a Model) -> Fem<'a> {
         Fem {
             model,
-            op: StiffnessOperator::new(model),
+            op: OnceLock::new(),
         }
+    }
+
+    /// The stiffness operator, built on first use.
+    fn op(&self) -> &StiffnessOperator<'a> {
+        self.op.get_or_init(|| StiffnessOperator::new(self.model))
     }
 }
 
@@ -137,7 +144,7 @@ impl Discretisation for Fem<'_> {
         NewmarkBody::t3(self.model, consistent_mass)
     }
     fn stiffness_times(&self, u: &[f64], out: &mut [f64], _: &mut ()) {
-        self.op.mul(u, out);
+        self.op().mul(u, out);
     }
     /// The fused kernel: K u and the update in one pass ([`StiffnessOperator::explicit_update`]).
     fn explicit_update(
@@ -148,6 +155,6 @@ impl Discretisation for Fem<'_> {
         u_next: &mut [f64],
         _: &mut (),
     ) {
-        self.op.explicit_update(a, u_prev, u, u_next);
+        self.op().explicit_update(a, u_prev, u, u_next);
     }
 }
