@@ -34,8 +34,9 @@
 //! the estimate states their geometric mean sqrt(2) d_y ([`ACROSS_TAIL`]), within a factor
 //! sqrt(2) of either end. Measured: the companion across is 2.5-3.4x more accurate than the
 //! presets at normal incidence and 3-12x at oblique incidence (rho = 0.08-0.4), where d_y
-//! alone was 0.64-0.72 and 0.94-1.11 of the truth. The stated error combines the two sources (a waveform's in quadrature, a scalar's as a
-//! sum), and the estimate names the larger as the dominant source
+//! alone was 0.64-0.72 and 0.94-1.11 of the truth. The stated error combines the two
+//! sources (a waveform's in quadrature, a scalar's as a sum), and the estimate names the
+//! larger as the dominant source
 //! ([`Estimate::dominant_source`]). The companions along x keep the scene's orders across and
 //! its step, so that they see the error along x alone: with their own rows and steps they
 //! saw an error across of their own, 1.4-12x the true error at oblique incidence
@@ -55,8 +56,8 @@ pub enum Refinement {
     /// tied to h: order 2.
     ElementSizes,
     /// Spectral elements on the same elements at orders p - 1 and p - 2 along x (the scene's
-    /// orders across, its step). Their error falls exponentially with the order, e_p ~ C rho^p: the
-    /// formulas above hold with 2^-q = rho, the ratio per order, and d_1 / (2^q - 1) =
+    /// orders across, its step). Their error falls exponentially with the order,
+    /// e_p ~ C rho^p: the formulas above hold with 2^-q = rho, the ratio per order, and d_1 / (2^q - 1) =
     /// d_1 rho / (1 - rho) is the geometric tail. The estimate expects a halving per order
     /// (order 1: the tail is d_1; at the slowest fall accepted, rho = 2^-0.5, it is 2.4 d_1).
     /// A faster fall between the lower orders overstates the fall at the top order (the error

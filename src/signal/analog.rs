@@ -4,9 +4,9 @@
 //! run samples it. The bilinear transform ([`super::butterworth`]) maps the analog frequency
 //! axis onto the unit circle with a warp, W = (2/dt) tan(w dt/2): its response depends on dt
 //! at O((w dt)^2) (a 0.1 us Gaussian pulse band-passed at 2 ns and at 3 ns differs by 4e-5),
-//! which two runs at different steps see as a difference of their physics. An FFT applies the analog response without warp, but a band-limited input's
-//! response is not causal to round-off (a scene and its impulse response convolved differ by
-//! 1e-5).
+//! which two runs at different steps see as a difference of their physics. An FFT applies
+//! the analog response without warp, but a band-limited input's response is not causal to
+//! round-off (a scene and its impulse response convolved differ by 1e-5).
 //!
 //! Here the filter is the analog system itself, written as a state space x' = A x + b u,
 //! y = c x (a cascade of second-order sections s / (s^2 + alpha s + beta), the band-pass
