@@ -17,9 +17,9 @@
 //!   Gamma_m = int_0^dt e^{A (dt - tau)} b L_m(tau / dt) dtau   (m = 0..3),
 //!
 //! with L_m the cubic's Lagrange weights. It is a causal linear filter on the samples (the
-//! output at t_k uses samples up to u_k; the input is zero before its first sample), and it
-//! differs from the analog filter only by the cubic's interpolation error, O((w dt)^4):
-//! 1e-8 in band at 3 ns. The integrals come from one matrix exponential of the state space
+//! output at t_k uses samples up to u_k; the samples before the first are zero), and it
+//! differs from the analog filter only by the cubic's interpolation error, O((w dt)^4): its
+//! gain is 1.1e-8 off at 2 MHz on a 2 ns step (about 6e-8 on 3 ns). The integrals come from one matrix exponential of the state space
 //! augmented with the cubic's Taylor coefficients (Van Loan's method); nalgebra's Pade
 //! exponential does it, with the states scaled so that dt A is of order w dt.
 //!
