@@ -19,11 +19,10 @@ use trnews::fem::{element, Model, StiffnessOperator};
 use trnews::laminate::{Laminate, StochasticSpec};
 use trnews::material::{Material, Plane};
 use trnews::mesh::{Mesh, Side};
-use trnews::scene::{Body, Scene, SceneSpec};
+use trnews::scene::{Body, Resolution, Scene, SceneSpec};
 use trnews::signal::Signal;
 use trnews::solve::{
     self, segment_receiver, traction_source, Discretisation, Fem, Quantity, RunConfig, Source,
-    StabilityEstimate,
 };
 use trnews::trnews as tr;
 
@@ -96,6 +95,20 @@ struct Report {
     bandwidth: Vec<Bandwidth>,
     sweep: Vec<SweepRow>,
     sem: Vec<SemRow>,
+    scene: Vec<SceneRow>,
+}
+
+/// One transmission of the real scene, the quick preset's cracked default scene on spectral
+/// elements (contact, the transducers' band and the time-dispersion transforms included), on
+/// a pool of `threads` threads: the run's own wall time (setup excluded), best over reps.
+#[derive(Serialize)]
+struct SceneRow {
+    dofs: usize,
+    threads: usize,
+    steps: usize,
+    ms_per_step: f64,
+    /// The 1-thread time over this one: the thread scaling of the real scene.
+    speedup: f64,
 }
 
 /// One stiffness product K u and one explicit step (the predictor u_next = 2u - u_prev -
@@ -253,14 +266,16 @@ fn timed_run(
         dt_s: Some(dt),
         duration_s: steps as f64 * dt,
         contact,
-        stability: Some(StabilityEstimate {
-            dt_crit_s: dt / 0.9,
-            dt_element_bound_s: dt / 0.9,
-            iterations: 0,
-        }),
         ..Default::default()
     };
-    let out = solve::run(model, sources, receivers, &config).expect("run");
+    let out = solve::run_on(
+        &solve::Fem::new(model),
+        dt / 0.9,
+        sources,
+        receivers,
+        &config,
+    )
+    .expect("run");
     (out.report.wall_time_s / out.report.steps as f64, out)
 }
 
@@ -327,7 +342,7 @@ fn triad(n: usize, threads: usize, reps: usize) -> f64 {
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    // --only SECTION (bandwidth, assembly, step, crack, sweep, sem) runs one section, for profiling.
+    // --only SECTION (bandwidth, assembly, step, crack, sweep, sem, scene) runs one section, for profiling.
     let args: Vec<String> = std::env::args().collect();
     let only = args
         .iter()
@@ -734,8 +749,53 @@ fn main() {
         }
     }
 
+    // --- the real scene ----------------------------------------------------------------------
+    let mut scene_rows = Vec::new();
+    if run_section("scene") {
+        let scene = Scene::build(&SceneSpec::preset(Resolution::Quick)).expect("quick preset");
+        let dt = scene.default_dt_s();
+        let steps = if quick { 200 } else { 2000 };
+        let reps = if quick { 1 } else { 3 };
+        let drive = chirp_signal(dt, steps, scene.spec.transmitter.peak_pa);
+        let config = RunConfig {
+            progress: false,
+            ..scene.run_config(steps as f64 * dt)
+        };
+        println!(
+            "\nThe quick preset's cracked scene on spectral elements ({} DOFs), one transmission of {steps} steps, run time without setup (best of {reps}):",
+            scene.dofs()
+        );
+        let mut one_thread = f64::NAN;
+        for &threads in &thread_counts {
+            let best = pool(threads).install(|| {
+                (0..reps)
+                    .map(|_| {
+                        let out = scene.transmit(&drive, &config).expect("transmit");
+                        out.report.wall_time_s
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            });
+            if threads == 1 {
+                one_thread = best;
+            }
+            let row = SceneRow {
+                dofs: scene.dofs(),
+                threads,
+                steps,
+                ms_per_step: best * 1e3 / steps as f64,
+                speedup: one_thread / best,
+            };
+            println!(
+                "  {threads} thread(s): {:8.3} ms/step (x{:.2} of 1 thread)",
+                row.ms_per_step, row.speedup
+            );
+            scene_rows.push(row);
+        }
+    }
+
     let report = Report {
         quick,
+        scene: scene_rows,
         sem: sem_rows,
         sweep: sweep_rows,
         rayon_threads_available: max_threads,

@@ -18,6 +18,7 @@ pub mod budget;
 pub mod contact;
 pub mod error;
 pub mod exact;
+pub mod experiment;
 pub mod fem;
 #[cfg(feature = "plot")]
 pub mod figures;

@@ -13,7 +13,7 @@ use crate::scene::{DiscretisationSpec, Scene, SceneSpec};
 use crate::sem::SemModel;
 use crate::signal::Signal;
 use crate::solve::{
-    run, run_on, segment_receiver, traction_source, Integrator, Quantity, Receiver, RunConfig,
+    run_on, segment_receiver, traction_source, Fem, Integrator, Quantity, Receiver, RunConfig,
     RunReport, Source,
 };
 use crate::trnews::{Responder, TrNewsSpec};
@@ -231,10 +231,15 @@ fn t3_points(spec: &WorkPrecisionSpec, wave: &PlaneWave) -> Result<Vec<WorkPreci
                 dt_s: Some(dt),
                 duration_s: wave.duration_s,
                 integrator,
-                stability: Some(stability),
                 ..Default::default()
             };
-            let out = run(&model, &[source], std::slice::from_ref(&receiver), &config)?;
+            let out = run_on(
+                &Fem::new(&model),
+                stability.dt_crit_s,
+                &[source],
+                std::slice::from_ref(&receiver),
+                &config,
+            )?;
             let integrator = if matches!(integrator, Integrator::Explicit) {
                 "explicit"
             } else {

@@ -64,7 +64,7 @@ for i in 0..points.len() {
 print(`largest relative difference, scene vs channel read from h.npy: ${worst}`);
 
 // a measured channel has no mesh: asking for an error estimate says so
-try { trnews::error_estimate_wanted(measured, true); assert(false, "estimate on a channel"); }
+try { experiment::setup(#{ error_estimate: true }).estimate_wanted(measured); assert(false, "estimate on a channel"); }
 catch (e) { assert(e.contains("simulated scene"), e); }
 try { trnews::channel_from_impulse([1.0], #{}); assert(false, "not a Signal"); }
 catch (e) { assert(e.contains("impulse[0]") && e.contains("Signal"), e); }

@@ -317,6 +317,58 @@ fn set_values_reach_the_script() {
 }
 
 #[test]
+fn experiment_setup_reads_set_over_script_defaults_and_names_bad_values() {
+    let dir = TempDir::new("cli-experiment");
+    let text = "let ex = experiment::setup();\n\
+                assert(ex.resolution == \"smoke\", \"resolution from --set\");\n\
+                assert(ex.discretisation == \"sem\", \"library default\");\n\
+                assert(ex.error_estimate == true, \"a tolerance turns the estimate on\");\n\
+                assert(ex.tolerance == 0.05, \"tolerance\");\n\
+                assert(ex.spec.chirp.t1_s == trnews::preset_spec(\"smoke\").chirp.t1_s, \"spec\");\n\
+                let t3 = experiment::setup(#{ discretisation: \"t3\" });\n\
+                assert(t3.discretisation == \"t3\", \"script default\");\n";
+    let s = dir.script("setup.rhai", text);
+    let args = ["--set", "resolution=smoke", "--set", "tolerance=0.05"];
+    let o = cli(dir.path(), &[&args[..], &[s.to_str().unwrap()]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).is_empty(),
+        "every parameter is read: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+
+    // A parameter of the setup the script never uses is named, not silently dropped.
+    let s = dir.script("unused.rhai", "let r = experiment::setup().resolution;\n");
+    let o = cli(
+        dir.path(),
+        &["--set", "error_estimate=true", s.to_str().unwrap()],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--set error_estimate") && err.contains("never asks"),
+        "{err}"
+    );
+
+    let s = dir.script("bad.rhai", "let ex = experiment::setup();\n");
+    for (set, needle) in [
+        ("resolution=fast", "invalid resolution = fast"),
+        ("discretisation=q4", "invalid discretisation = q4"),
+        ("error_estimate=maybe", "invalid error_estimate = \"maybe\""),
+        ("tolerance=2", "invalid tolerance = 2"),
+    ] {
+        let o = cli(dir.path(), &["--set", set, s.to_str().unwrap()]);
+        assert_one_line_error(&o, &s, "1:22", needle);
+    }
+    let s = dir.script(
+        "bad_default.rhai",
+        "experiment::setup(#{ resolutoin: \"smoke\" });\n",
+    );
+    let o = cli(dir.path(), &[s.to_str().unwrap()]);
+    assert_one_line_error(&o, &s, "1:13", "experiment.resolutoin");
+}
+
+#[test]
 fn failed_assertion_shows_both_values() {
     let dir = TempDir::new("cli-assert");
     let s = dir.script("a.rhai", "\nassert_close(1.02, 1.0, 0.01, \"gain\");\n");

@@ -163,14 +163,13 @@ impl Scene {
         self.spec.contact()
     }
 
-    /// A run configuration for this scene: its step when the spec fixes one, its contact
-    /// options and stability estimate.
+    /// A run configuration for this scene: its step when the spec fixes one and its contact
+    /// options.
     pub fn run_config(&self, duration_s: f64) -> RunConfig {
         RunConfig {
             duration_s,
             dt_s: self.spec.time_step_s,
             contact: self.contact(),
-            stability: Some(self.stability),
             ..Default::default()
         }
     }
@@ -295,20 +294,18 @@ impl Scene {
             weights: self.transmitter.clone(),
             signal: traction.clone(),
         };
-        let stability = config.stability.unwrap_or(self.stability);
-        let config = RunConfig {
-            stability: Some(stability),
-            ..config.clone()
-        };
+        let dt_crit_s = self.stability.dt_crit_s;
         let out = match &self.body {
-            Body::T3(model) => solve::run(model, &[source], &self.receivers, &config)?,
-            Body::Sem { model, .. } => solve::run_on(
-                model,
-                stability.dt_crit_s,
+            Body::T3(model) => solve::run_on(
+                &solve::Fem::new(model),
+                dt_crit_s,
                 &[source],
                 &self.receivers,
-                &config,
+                config,
             )?,
+            Body::Sem { model, .. } => {
+                solve::run_on(model, dt_crit_s, &[source], &self.receivers, config)?
+            }
         };
         let drive_max = traction.max_abs();
         if drive_max > 0.0

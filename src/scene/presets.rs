@@ -13,10 +13,11 @@ use serde::{Deserialize, Serialize};
 
 /// The resolution presets of the experiments: the scene ([`SceneSpec::preset`]) and the
 /// TR-NEWS timings ([`crate::trnews::TrNewsSpec::preset`]) that go with it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Resolution {
     /// The report's scene on a mesh that runs in minutes (the default).
+    #[default]
     Quick,
     /// The report's scene at the report's element size (20 um x 10 um; hours).
     Paper,
@@ -135,11 +136,10 @@ impl SceneSpec {
         }
     }
 
-    /// The scene of a resolution preset on its default discretisation, the spectral
-    /// elements of [`SemPreset::of`] (chosen on an exact solution through the plies:
-    /// docs/src/validation/normal-incidence.md).
+    /// The scene of a resolution preset on the default discretisation
+    /// ([`DiscretisationKind::default`]: the spectral elements of [`SemPreset::of`]).
     pub fn preset(resolution: Resolution) -> SceneSpec {
-        SceneSpec::preset_on(resolution, DiscretisationKind::Sem)
+        SceneSpec::preset_on(resolution, DiscretisationKind::default())
     }
 
     /// The scene of a resolution preset on the discretisation `kind`: for T3 the scene's own

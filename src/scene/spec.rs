@@ -443,11 +443,14 @@ impl Default for TimeDispersionSpec {
 }
 
 /// The discretisations the experiments choose by name (`--set discretisation=t3|sem`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum DiscretisationKind {
-    /// Linear triangles.
+    /// Linear triangles, the report's.
     T3,
-    /// Spectral elements.
+    /// Spectral elements (the default of the presets and the experiments: chosen on exact
+    /// solutions through the plies, docs/src/validation/spectral-elements.md).
+    #[default]
     Sem,
 }
 

@@ -1,8 +1,8 @@
-//! `trnews::channel()`: the channel an experiment script runs on, read from its `--set`
+//! `experiment.channel`: the channel an experiment script runs on, read from its `--set`
 //! parameters in this one place, so that every experiment script takes the same ones
 //! (docs/src/guide/lab-data.md):
 //!
-//! - `channel = scene` (default): the script simulates its scenes; `channel()` gives ().
+//! - `channel = scene` (default): the script simulates its scenes; the channel is ().
 //! - `channel = impulse`, `impulse = FILE.npy` (under `--data`; one row per receiver: the
 //!   response to a unit drive sample at t = 0), `dt_s`, `peak_drive`: a measured linear
 //!   channel ([`crate::trnews::Responder::from_impulse`]).

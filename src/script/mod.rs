@@ -13,6 +13,7 @@
 mod accuracy;
 mod channel;
 mod convert;
+mod experiment;
 mod figure;
 mod format;
 mod host;
@@ -51,6 +52,7 @@ const MODULES: &[(&str, ModuleBuilder)] = &[
     ("laminate", laminate::module),
     ("scene", scene::module),
     ("trnews", trnews::module),
+    ("experiment", experiment::module),
     ("study", study::module),
     ("figure", figure::module),
     ("fmt", format::module),
@@ -187,6 +189,12 @@ impl HostContext {
                 asked.insert(name.to_string());
             }
         }
+        self.params.get(name)
+    }
+
+    /// The `--set` value of parameter `name`, if given, without marking it asked for: for a
+    /// binding that validates a setup at once and marks each parameter as the script uses it.
+    pub fn given(&self, name: &str) -> Option<&Dynamic> {
         self.params.get(name)
     }
 
@@ -657,6 +665,7 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
     laminate::register_types(&mut engine);
     scene::register_types(&mut engine);
     trnews::register_types(&mut engine);
+    experiment::register_types(&mut engine);
     study::register_types(&mut engine);
     for (name, build) in MODULES {
         engine.register_static_module(*name, build().into());

@@ -26,7 +26,11 @@ pub fn module() -> Module {
 }
 
 /// Builds a scene from an override map over `base`.
-fn build(ctx: &NativeCallContext, overrides: Map, base: SceneSpec) -> ScriptResult<SceneRef> {
+pub(crate) fn build(
+    ctx: &NativeCallContext,
+    overrides: Map,
+    base: SceneSpec,
+) -> ScriptResult<SceneRef> {
     refuse_unused_segment(ctx, &overrides)?;
     refuse_ignored_by_gmsh(ctx, &overrides)?;
     let mut spec: SceneSpec = overlay(ctx, overrides, &base, "scene")?;
@@ -118,11 +122,36 @@ pub fn index(ctx: &NativeCallContext, k: rhai::INT, len: usize, what: &str) -> S
         .ok_or_else(|| error(ctx, format!("{what} {k} does not exist (1..={len})")))
 }
 
+/// `scene` refined for a requested relative error `tolerance` of the first-pass responses to
+/// the chirp of `tr` ([`crate::study::resolution_for_tolerance`]), saying what was chosen.
+pub(crate) fn refined_for(
+    ctx: &NativeCallContext,
+    scene: &SceneRef,
+    tolerance: f64,
+    tr: &crate::trnews::TrNewsSpec,
+) -> ScriptResult<SceneRef> {
+    let (spec, c) = crate::study::resolution_for_tolerance(&scene.spec, tolerance, tr).at(ctx)?;
+    crate::script::HostContext::of(ctx)?.print(&format!(
+        "tolerance {tolerance}: element sizes {:.3e} x {:.3e} m ({}x the scene's), \
+         predicted error {:.2e} (pilot differences {:.2e} and {:.2e}, order {:.2}), \
+         predicted run time {:.3e} s per transmission",
+        c.element_size_x_m,
+        c.element_size_y_m,
+        c.size_factor,
+        c.predicted_error,
+        c.pilot_differences[0],
+        c.pilot_differences[1],
+        c.order,
+        c.predicted_run_time_s,
+    ));
+    Ok(Arc::new(Scene::build(&spec).at(ctx)?))
+}
+
 #[export_module]
 mod scene_api {
     use super::{index, RunRef, SceneRef};
     use crate::scene::SceneSpec;
-    use crate::script::convert::{options, overlay, to_dynamic, WithPosition};
+    use crate::script::convert::{overlay, to_dynamic, WithPosition};
     use crate::signal::Signal;
     use crate::solve::RunConfig;
     use rhai::{Array, Dynamic, Map, NativeCallContext, FLOAT, INT};
@@ -159,37 +188,6 @@ mod scene_api {
     ) -> Res<SceneRef> {
         let base = SceneSpec::preset_on(name.parse().at(&ctx)?, kind.parse().at(&ctx)?);
         super::build(&ctx, overrides, base)
-    }
-
-    /// The scene refined for a requested accuracy: element sizes halved until the predicted relative L2 error of the first-pass responses to the chirp of the TR-NEWS `spec` map is at most `tolerance` (pilot runs of the crack-tied scene at h, 2h, 4h; see `study::resolution_for_tolerance`); prints the chosen sizes, the predicted error and run time. `tolerance` 0 returns the scene unchanged. Check the result after the run with an error estimate.
-    #[rhai_fn(return_raw)]
-    pub fn for_tolerance(
-        ctx: NativeCallContext,
-        scene: SceneRef,
-        tolerance: FLOAT,
-        spec: Map,
-    ) -> Res<SceneRef> {
-        if tolerance == 0.0 {
-            return Ok(scene);
-        }
-        let tr: crate::trnews::TrNewsSpec =
-            options(&ctx, spec, &crate::trnews::TrNewsSpec::default(), "tr_news")?;
-        let (spec, c) =
-            crate::study::resolution_for_tolerance(&scene.spec, tolerance, &tr).at(&ctx)?;
-        crate::script::HostContext::of(&ctx)?.print(&format!(
-            "tolerance {tolerance}: element sizes {:.3e} x {:.3e} m ({}x the scene's), \
-             predicted error {:.2e} (pilot differences {:.2e} and {:.2e}, order {:.2}), \
-             predicted run time {:.3e} s per transmission",
-            c.element_size_x_m,
-            c.element_size_y_m,
-            c.size_factor,
-            c.predicted_error,
-            c.pilot_differences[0],
-            c.pilot_differences[1],
-            c.order,
-            c.predicted_run_time_s,
-        ));
-        Ok(Arc::new(crate::scene::Scene::build(&spec).at(&ctx)?))
     }
 
     /// The uncracked companion: the same scene with the crack's faces tied, on the same mesh and with the same time step (the cracked scene's dt_crit).

@@ -20,22 +20,6 @@ pub fn register_types(engine: &mut Engine) {
         .register_type_with_name::<Delayed>("Delayed");
 }
 
-/// `error_estimate` as a script writes it: true, false or "auto" ([`ErrorEstimate`]).
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(untagged)]
-pub enum EstimateChoice {
-    /// On or off.
-    Flag(bool),
-    /// "auto".
-    Word(String),
-}
-
-impl Default for EstimateChoice {
-    fn default() -> Self {
-        EstimateChoice::Flag(false)
-    }
-}
-
 /// Options of `trnews::responder(scene, duration_s, options)`.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -45,7 +29,7 @@ pub struct ResponderOptions {
     /// across) and report error estimates
     /// (see `accuracy`): true, false, or "auto" (on when the companions cost at most 30% of
     /// the main runs, [`crate::trnews::AUTO_ESTIMATE_MAX_COST`]).
-    pub error_estimate: EstimateChoice,
+    pub error_estimate: crate::trnews::ErrorEstimate,
     /// The time step as a fraction of the scene's dt_crit, in (0, 1]: below the default 0.9
     /// to measure or shrink the central-difference time error (O(dt^2)). Not given: the
     /// scene's step (its `time_step_s`, else 0.9 dt_crit).
@@ -54,29 +38,13 @@ pub struct ResponderOptions {
 
 /// The companion scenes of an error estimate when `choice` asks for one
 /// ([`Responder::estimate_decision`]), printing why not when "auto" finds them too costly.
-fn companions_wanted(
+pub(crate) fn companions_wanted(
     ctx: &NativeCallContext,
     r: &Responder,
-    choice: &EstimateChoice,
+    choice: crate::trnews::ErrorEstimate,
 ) -> ScriptResult<Option<Vec<Arc<crate::scene::Scene>>>> {
     use crate::script::WithPosition;
-    use crate::trnews::{ErrorEstimate, EstimateDecision, AUTO_ESTIMATE_MAX_COST};
-    // A word as well as a flag: `--set error_estimate=true` may reach a script as either.
-    let choice = match choice {
-        EstimateChoice::Flag(true) => ErrorEstimate::On,
-        EstimateChoice::Flag(false) => ErrorEstimate::Off,
-        EstimateChoice::Word(w) if w == "true" => ErrorEstimate::On,
-        EstimateChoice::Word(w) if w == "false" => ErrorEstimate::Off,
-        EstimateChoice::Word(w) if w == "auto" => ErrorEstimate::Auto,
-        EstimateChoice::Word(other) => {
-            return Err(error(
-                ctx,
-                format!(
-                "invalid responder.error_estimate = \"{other}\": expected true, false or \"auto\""
-            ),
-            ))
-        }
-    };
+    use crate::trnews::{EstimateDecision, AUTO_ESTIMATE_MAX_COST};
     match r.estimate_decision(choice).at(ctx)? {
         EstimateDecision::Off => Ok(None),
         EstimateDecision::On(scenes) => Ok(Some(scenes)),
@@ -200,120 +168,6 @@ pub fn module() -> Module {
     exported_module!(trnews_api)
 }
 
-/// Delayed TR-NEWS over `points` as a sweep of work units (see [`crate::sweep`]): each point
-/// is stored when done, read back by a rerun, shared out by a shard and only read by a
-/// merge. Points are computed in parallel; each one runs over the sweep's longest delay, so
-/// it is the same computed alone or with the others. On a lab channel (recordings, see
-/// [`crate::lab`]) the points are looked up together instead, without point files.
-fn delayed_sweep(
-    ctx: &NativeCallContext,
-    r: &Responder,
-    tr: &TrNews,
-    focus: &Focus,
-    points: &[(Vec<f64>, Vec<f64>)],
-    half_window_s: f64,
-) -> ScriptResult<Vec<Delayed>> {
-    use crate::script::WithPosition;
-    use crate::sweep::{Key, PointSpec, Sweep};
-    if crate::trnews::to_record_of(r).is_some() {
-        // A lab's recordings are looked up, not simulated: every point at once, so that one
-        // run lists every delayed drive still to record.
-        return crate::trnews::delayed_tr_news(r, tr, focus, points, half_window_s).at(ctx);
-    }
-    let max_delay_s = points
-        .iter()
-        .flat_map(|p| p.0.iter())
-        .fold(0.0f64, |m, d| m.max(*d));
-    // The first pass enters the keys by content: the focusing signal and the focused signal
-    // at this receiver, on every discretisation of the responder (not the run reports,
-    // whose wall times differ between processes computing the same first pass).
-    let focusing: Vec<(&crate::signal::Signal, &crate::signal::Signal)> = std::iter::once(tr)
-        .chain(&tr.companions)
-        .filter_map(|t| t.focus.iter().find(|f| f.receiver == focus.receiver))
-        .map(|f| (&f.source, &f.focused))
-        .collect();
-    let first_pass = Key::of("delayed_first_pass", &(&tr.spec, &focusing)).at(ctx)?;
-    let identity = r.identity().at(ctx)?;
-    let specs = points
-        .iter()
-        .map(|(delays, amplitudes)| {
-            let inputs = (
-                &identity,
-                first_pass.as_str(),
-                focus.receiver,
-                half_window_s,
-                max_delay_s,
-                delays,
-                amplitudes,
-            );
-            Ok(PointSpec {
-                key: Key::of("delayed", &inputs)?,
-                label: format!("tau = {delays:?} s, a = {amplitudes:?}"),
-                sharded: r.simulates(),
-            })
-        })
-        .collect::<crate::Result<Vec<_>>>()
-        .at(ctx)?;
-    let how = if r.simulates() {
-        "simulated"
-    } else {
-        "convolved or recorded"
-    };
-    let name = format!("delayed TR-NEWS at receiver {} ({how})", focus.receiver);
-    let estimates = !r.companions().is_empty();
-    let expect = |d: &Delayed| expect_delayed(d, r.dt_s(), estimates);
-    let sweep = Sweep::start::<Delayed>(&name, "delayed", specs, &expect);
-    crate::parallel::try_for_each(sweep.pending(), |&i| {
-        let start = std::time::Instant::now();
-        let one = &points[i..=i];
-        let outcome =
-            crate::trnews::delayed_tr_news_within(r, tr, focus, one, half_window_s, max_delay_s)
-                .map(|mut v| v.remove(0));
-        let note = outcome
-            .as_ref()
-            .ok()
-            .and_then(|d| d.report.as_ref())
-            .map(report_note)
-            .unwrap_or_default();
-        sweep.record(i, outcome, start.elapsed().as_secs_f64(), &note)
-    })
-    .at(ctx)?;
-    sweep
-        .finish()
-        .map_err(|e| crate::script::sweep_error(ctx, e))
-}
-
-/// Why a stored point cannot be a delayed TR-NEWS point on step `dt_s` (with `estimates` when
-/// the responder has companions): see [`crate::sweep::Expect`].
-fn expect_delayed(d: &Delayed, dt_s: f64, estimates: bool) -> Result<(), String> {
-    let (sim, pred) = (&d.simulation, &d.prediction);
-    if sim.dt_s != dt_s || pred.dt_s != dt_s || sim.len() != pred.len() {
-        return Err("holds a simulation and a prediction on different grids".into());
-    }
-    if d.delays_s.len() != d.amplitudes.len() || !(d.window_s.0 <= d.window_s.1) {
-        return Err("holds delays, amplitudes or a window that do not go together".into());
-    }
-    if d.estimates.is_some() != estimates {
-        return Err("holds error estimates unlike its responder".into());
-    }
-    Ok(())
-}
-
-/// A run report in a progress line: steps, energy residual, dt/dt_crit and, with contact,
-/// the capped steps and the largest penetration.
-fn report_note(rep: &crate::solve::RunReport) -> String {
-    let contact = rep.contact.as_ref().map_or(String::new(), |c| {
-        format!(
-            ", contact capped steps {}, max penetration {:.2e} m",
-            c.capped_steps, c.max_penetration_m
-        )
-    });
-    format!(
-        " ({} steps, energy residual {:.1e}, dt/dt_crit {:.3}{contact})",
-        rep.steps, rep.energy_residual_peak, rep.stability_ratio
-    )
-}
-
 /// Delay points from an array of maps #{delays: [...], amplitudes: [...]}: as many delays as
 /// amplitudes, delays finite and >= 0, amplitudes finite (checked here, so that a bad point
 /// is an error naming it, not a failed work unit).
@@ -418,12 +272,6 @@ mod trnews_api {
     #[rhai_fn(return_raw)]
     pub fn responder(ctx: NativeCallContext, scene: SceneRef, duration_s: FLOAT) -> Res<Responder> {
         Responder::new(scene, duration_s).at(&ctx)
-    }
-
-    /// The channel an experiment script runs on, from its `--set` parameters (the same for every script; docs/src/guide/lab-data.md): `channel = scene` (default) gives () and the script simulates its scenes; `channel = impulse` (with impulse = FILE.npy under --data, one row per receiver, dt_s, peak_drive) gives a measured linear channel and `channel = recorded` (with recordings = DIR, a lab directory under --data, dt_s, peak_drive) a lab's recordings, each as #{kind, sample, responder}; `band` and `sample` label the data. On the recorded channel, drives not recorded yet are written to OUT/to_record/ and the run stops saying how to add them. A parameter that does not apply to the chosen channel is an error.
-    #[rhai_fn(return_raw)]
-    pub fn channel(ctx: NativeCallContext) -> Res<Dynamic> {
-        crate::script::channel::from_params(&ctx)
     }
 
     /// A measured channel from one impulse response per receiver (Signals on one step: each receiver's response to a unit drive sample at t = 0, transducers included), with options #{peak_drive, band}: every transmission is the discrete convolution y_r[n] = sum_k s[k] h_r[n - k], and tr_news, delayed and pulse_inversion run on it as on a scene.
@@ -646,7 +494,8 @@ mod trnews_api {
             .find(|f| f.receiver as INT == k)
             .ok_or_else(|| super::error(&ctx, format!("receiver {k} was not focused")))?;
         let points = points(&ctx, &list)?;
-        let results = super::delayed_sweep(&ctx, &r, &tr, focus, &points, half_window_s)?;
+        let results = crate::trnews::delayed_sweep(&r, &tr, focus, &points, half_window_s)
+            .map_err(|e| crate::script::sweep_error(&ctx, e))?;
         Ok(results.into_iter().map(Dynamic::from).collect())
     }
 
@@ -756,24 +605,10 @@ mod trnews_api {
             }
         };
         let r = Responder::with_step(scene, duration_s, dt_s).at(&ctx)?;
-        match super::companions_wanted(&ctx, &r, &o.error_estimate)? {
+        match super::companions_wanted(&ctx, &r, o.error_estimate)? {
             Some(scenes) => r.with_companions(scenes, duration_s).at(&ctx),
             None => Ok(r),
         }
-    }
-
-    /// Whether `choice` (true, false or "auto", as given to `responder`) turns the error estimate on for `r`: "auto" when the scene's companions (`scene.companions()`) would cost at most 30% extra (and says so when they would not). For scripts that estimate their own quantities from runs on the companions.
-    #[rhai_fn(global, return_raw)]
-    pub fn error_estimate_wanted(
-        ctx: NativeCallContext,
-        r: Responder,
-        choice: Dynamic,
-    ) -> Res<bool> {
-        let mut settings = Map::new();
-        settings.insert("error_estimate".into(), choice);
-        let o: ResponderOptions =
-            options(&ctx, settings, &ResponderOptions::default(), "responder")?;
-        Ok(super::companions_wanted(&ctx, &r, &o.error_estimate)?.is_some())
     }
 
     /// True when the responder repeats its procedures on coarser companions for error estimates.

@@ -132,10 +132,6 @@ pub struct RunConfig {
     pub initial_velocity: Option<Vec<f64>>,
     /// Report progress to the installed [`progress::ProgressReporter`], if any.
     pub progress: bool,
-    /// A precomputed stability estimate for this model, to skip the Lanczos estimate (a
-    /// scene's runs take the scene's).
-    #[serde(skip)]
-    pub stability: Option<StabilityEstimate>,
 }
 
 impl RunConfig {
@@ -170,7 +166,6 @@ impl Default for RunConfig {
             initial_displacement: None,
             initial_velocity: None,
             progress: true,
-            stability: None,
         }
     }
 }
@@ -249,8 +244,8 @@ pub struct RunOutput {
     pub ledger: EnergyLedger,
 }
 
-/// The standard run of a T3 model ([`run_on`] its [`Fem`]) at the critical step of
-/// `config.stability`, estimated here when not given.
+/// The standard run of a T3 model ([`run_on`] its [`Fem`]) at its critical step, estimated
+/// here ([`stability::estimate`]; a caller that knows it calls [`run_on`]).
 pub fn run(
     model: &Model,
     sources: &[Source],
@@ -259,9 +254,7 @@ pub fn run(
 ) -> Result<RunOutput> {
     let setup = Instant::now();
     validate(model.dofs(), sources, receivers, config)?;
-    let stab = config
-        .stability
-        .unwrap_or_else(|| stability::estimate(model));
+    let stab = stability::estimate(model);
     let fem = Fem::new(model);
     run_validated(&fem, stab.dt_crit_s, (sources, receivers), config, setup)
 }
@@ -271,8 +264,8 @@ pub fn run(
 /// crack ([`Discretisation::crack`]) under `config.contact`; the fourth-order step; or
 /// Newmark on the body's assembled stiffness ([`Discretisation::newmark_body`], contact and
 /// periodic edges refused). The same loop, observers, checks and report whatever the body.
-/// `dt_crit_s` is the body's explicit critical step (e.g.
-/// [`crate::sem::SemModel::max_eigenvalue`]); `config.stability` is not used.
+/// `dt_crit_s` is the body's explicit critical step (e.g. [`stability::estimate`], or
+/// [`crate::sem::SemModel::max_eigenvalue`]).
 pub fn run_on<D: Discretisation>(
     body: &D,
     dt_crit_s: f64,

@@ -20,7 +20,8 @@ use std::sync::Arc;
 pub const AUTO_ESTIMATE_MAX_COST: f64 = 0.30;
 
 /// Whether a responder repeats its procedures on its error estimate's companions
-/// ([`Responder::estimate_decision`]).
+/// ([`Responder::estimate_decision`]). Written `true`, `false` or `"auto"` (as a word too:
+/// `--set error_estimate=true` may reach a script as either).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ErrorEstimate {
     /// Never.
@@ -30,6 +31,51 @@ pub enum ErrorEstimate {
     On,
     /// When the companions cost at most [`AUTO_ESTIMATE_MAX_COST`] of the main runs.
     Auto,
+}
+
+impl std::str::FromStr for ErrorEstimate {
+    type Err = Error;
+
+    /// `true`, `false` or `auto`; anything else is refused, naming the value.
+    fn from_str(word: &str) -> Result<ErrorEstimate> {
+        match word {
+            "true" => Ok(ErrorEstimate::On),
+            "false" => Ok(ErrorEstimate::Off),
+            "auto" => Ok(ErrorEstimate::Auto),
+            other => Err(Error::invalid(
+                "error_estimate",
+                format!("\"{other}\""),
+                "expected true, false or \"auto\"",
+            )),
+        }
+    }
+}
+
+impl Serialize for ErrorEstimate {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        match self {
+            ErrorEstimate::Off => s.serialize_bool(false),
+            ErrorEstimate::On => s.serialize_bool(true),
+            ErrorEstimate::Auto => s.serialize_str("auto"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for ErrorEstimate {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        /// The two ways of writing it.
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Written {
+            Flag(bool),
+            Word(String),
+        }
+        match Written::deserialize(d)? {
+            Written::Flag(true) => Ok(ErrorEstimate::On),
+            Written::Flag(false) => Ok(ErrorEstimate::Off),
+            Written::Word(w) => w.parse().map_err(serde::de::Error::custom),
+        }
+    }
 }
 
 /// What an [`ErrorEstimate`] choice gives on a responder.
@@ -758,7 +804,7 @@ pub(super) fn truncate(s: Signal, n: usize) -> Signal {
 }
 
 /// The list of drives to record of a lab channel, `None` for any other responder.
-pub fn to_record_of(r: &Responder) -> Option<&Arc<ToRecord>> {
+pub(super) fn to_record_of(r: &Responder) -> Option<&Arc<ToRecord>> {
     match r.channel() {
         Channel::Recorded(c) => c.to_record.as_ref(),
         _ => None,

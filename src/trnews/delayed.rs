@@ -1,12 +1,13 @@
 //! Delayed TR-NEWS (report eqs 10-11): the focusing drive plus delayed, scaled copies, and the
 //! misfit between the simulation and the linear prediction from y_TR.
 
-use super::channel::{truncate, Responder};
+use super::channel::{to_record_of, truncate, Responder};
 use super::focus::{Focus, TrNews};
 use crate::accuracy::Estimate;
 use crate::error::{Error, Result};
 use crate::signal::{self, Signal};
 use crate::solve::RunReport;
+use crate::sweep::{Key, PointSpec, Sweep, SweepError};
 use serde::{Deserialize, Serialize};
 
 /// Delayed TR-NEWS at one point (eqs 10-11): simulation of the composite source
@@ -174,4 +175,123 @@ fn delayed_once(
             })
         })
         .collect()
+}
+
+/// Delayed TR-NEWS over `points` as a sweep of work units (see [`crate::sweep`]): each point
+/// is stored when done, read back by a rerun, shared out by a shard and only read by a
+/// merge. Points are computed in parallel; each one runs over the sweep's longest delay, so
+/// it is the same computed alone or with the others. On a lab channel (recordings, see
+/// [`crate::lab`]) the points are looked up together instead, without point files.
+pub fn delayed_sweep(
+    r: &Responder,
+    tr: &TrNews,
+    focus: &Focus,
+    points: &[(Vec<f64>, Vec<f64>)],
+    half_window_s: f64,
+) -> std::result::Result<Vec<Delayed>, SweepError> {
+    if to_record_of(r).is_some() {
+        // A lab's recordings are looked up, not simulated: every point at once, so that one
+        // run lists every delayed drive still to record.
+        return Ok(delayed_tr_news(r, tr, focus, points, half_window_s)?);
+    }
+    let max_delay_s = points
+        .iter()
+        .flat_map(|p| p.0.iter())
+        .fold(0.0f64, |m, d| m.max(*d));
+    let specs = point_specs(r, tr, focus, points, half_window_s, max_delay_s)?;
+    let how = if r.simulates() {
+        "simulated"
+    } else {
+        "convolved or recorded"
+    };
+    let name = format!("delayed TR-NEWS at receiver {} ({how})", focus.receiver);
+    let estimates = !r.companions().is_empty();
+    let expect = |d: &Delayed| expect_delayed(d, r.dt_s(), estimates);
+    let sweep = Sweep::start::<Delayed>(&name, "delayed", specs, &expect);
+    crate::parallel::try_for_each(sweep.pending(), |&i| {
+        let start = std::time::Instant::now();
+        let one = &points[i..=i];
+        let outcome = delayed_tr_news_within(r, tr, focus, one, half_window_s, max_delay_s)
+            .map(|mut v| v.remove(0));
+        let note = outcome
+            .as_ref()
+            .ok()
+            .and_then(|d| d.report.as_ref())
+            .map(report_note)
+            .unwrap_or_default();
+        sweep.record(i, outcome, start.elapsed().as_secs_f64(), &note)
+    })?;
+    sweep.finish()
+}
+
+/// The work units of a delayed sweep, keyed by what determines their results: the channel,
+/// the first pass (the focusing signal and the focused signal at this receiver, on every
+/// discretisation of the responder; not the run reports, whose wall times differ between
+/// processes computing the same first pass), the receiver, the window, the sweep's longest
+/// delay and the point.
+fn point_specs(
+    r: &Responder,
+    tr: &TrNews,
+    focus: &Focus,
+    points: &[(Vec<f64>, Vec<f64>)],
+    half_window_s: f64,
+    max_delay_s: f64,
+) -> Result<Vec<PointSpec>> {
+    let focusing: Vec<(&Signal, &Signal)> = std::iter::once(tr)
+        .chain(&tr.companions)
+        .filter_map(|t| t.focus.iter().find(|f| f.receiver == focus.receiver))
+        .map(|f| (&f.source, &f.focused))
+        .collect();
+    let first_pass = Key::of("delayed_first_pass", &(&tr.spec, &focusing))?;
+    let identity = r.identity()?;
+    points
+        .iter()
+        .map(|(delays, amplitudes)| {
+            let inputs = (
+                &identity,
+                first_pass.as_str(),
+                focus.receiver,
+                half_window_s,
+                max_delay_s,
+                delays,
+                amplitudes,
+            );
+            Ok(PointSpec {
+                key: Key::of("delayed", &inputs)?,
+                label: format!("tau = {delays:?} s, a = {amplitudes:?}"),
+                sharded: r.simulates(),
+            })
+        })
+        .collect()
+}
+
+/// Why a stored point cannot be a delayed TR-NEWS point on step `dt_s` (with `estimates` when
+/// the responder has companions): see [`crate::sweep::Expect`].
+fn expect_delayed(d: &Delayed, dt_s: f64, estimates: bool) -> std::result::Result<(), String> {
+    let (sim, pred) = (&d.simulation, &d.prediction);
+    if sim.dt_s != dt_s || pred.dt_s != dt_s || sim.len() != pred.len() {
+        return Err("holds a simulation and a prediction on different grids".into());
+    }
+    if d.delays_s.len() != d.amplitudes.len() || !(d.window_s.0 <= d.window_s.1) {
+        return Err("holds delays, amplitudes or a window that do not go together".into());
+    }
+    if d.estimates.is_some() != estimates {
+        return Err("holds error estimates unlike its responder".into());
+    }
+    Ok(())
+}
+
+/// A run report in a progress line: steps, energy residual, dt/dt_crit and, with contact,
+/// the capped steps and the largest penetration.
+fn report_note(rep: &RunReport) -> String {
+    let contact = rep.contact.as_ref().map_or(String::new(), |c| {
+        format!(
+            ", contact capped steps {}, max penetration {:.2e} m",
+            c.capped_steps, c.max_penetration_m
+        )
+    });
+    format!(
+        " ({} steps, energy residual {:.1e}, dt/dt_crit {:.3}{contact})",
+        rep.steps, rep.energy_residual_peak, rep.stability_ratio
+    )
 }

@@ -23,9 +23,11 @@ pub use crate::lab::Recording;
 #[cfg(feature = "io")]
 pub use channel::lab_channel;
 pub use channel::{
-    to_record_of, Channel, ChannelIdentity, ErrorEstimate, EstimateDecision, ImpulseChannel,
-    RecordedChannel, Responder, Response, AUTO_ESTIMATE_MAX_COST,
+    Channel, ChannelIdentity, ErrorEstimate, EstimateDecision, ImpulseChannel, RecordedChannel,
+    Responder, Response, AUTO_ESTIMATE_MAX_COST,
 };
-pub use delayed::{delayed_tr_news, delayed_tr_news_within, Delayed, DelayedEstimates};
+pub use delayed::{
+    delayed_sweep, delayed_tr_news, delayed_tr_news_within, Delayed, DelayedEstimates,
+};
 pub use focus::{tr_news, Focus, FocusEstimates, TrNews, TrNewsSpec};
 pub use pulse_inversion::{pulse_inversion, PulseInversion};
