@@ -755,7 +755,7 @@ fn main() {
         let scene = Scene::build(&SceneSpec::preset(Resolution::Quick)).expect("quick preset");
         let dt = scene.default_dt_s();
         let steps = if quick { 200 } else { 2000 };
-        let reps = if quick { 1 } else { 3 };
+        let reps = if quick { 1 } else { 5 };
         let drive = chirp_signal(dt, steps, scene.spec.transmitter.peak_pa);
         let config = RunConfig {
             progress: false,
@@ -765,25 +765,22 @@ fn main() {
             "\nThe quick preset's cracked scene on spectral elements ({} DOFs), one transmission of {steps} steps, run time without setup (best of {reps}):",
             scene.dofs()
         );
-        let mut one_thread = f64::NAN;
-        for &threads in &thread_counts {
-            let best = pool(threads).install(|| {
-                (0..reps)
-                    .map(|_| {
-                        let out = scene.transmit(&drive, &config).expect("transmit");
-                        out.report.wall_time_s
-                    })
-                    .fold(f64::INFINITY, f64::min)
-            });
-            if threads == 1 {
-                one_thread = best;
+        // Interleaved, so that machine noise hits every thread count alike.
+        let pools: Vec<rayon::ThreadPool> = thread_counts.iter().map(|&t| pool(t)).collect();
+        let mut best = vec![f64::INFINITY; pools.len()];
+        for _ in 0..reps {
+            for (b, p) in best.iter_mut().zip(&pools) {
+                let out = p.install(|| scene.transmit(&drive, &config).expect("transmit"));
+                *b = b.min(out.report.wall_time_s);
             }
+        }
+        for (&threads, &time) in thread_counts.iter().zip(&best) {
             let row = SceneRow {
                 dofs: scene.dofs(),
                 threads,
                 steps,
-                ms_per_step: best * 1e3 / steps as f64,
-                speedup: one_thread / best,
+                ms_per_step: time * 1e3 / steps as f64,
+                speedup: best[0] / time,
             };
             println!(
                 "  {threads} thread(s): {:8.3} ms/step (x{:.2} of 1 thread)",
