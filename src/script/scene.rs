@@ -266,7 +266,7 @@ mod scene_api {
         Ok(m.into())
     }
 
-    /// Transmits `traction` (Pa) from the transmitter with run options #{duration_s, dt_s, step_safety, integrator, force, ledger_every, snapshot_every, snapshot_dir (under the output directory), record_crack, contact (laid over the scene's; () opens the crack), progress}; returns the Run.
+    /// Transmits `traction` (Pa) from the transmitter with run options #{duration_s, dt_s, step_fraction, integrator, force, ledger_every, snapshot_every, snapshot_dir (under the output directory), record_crack, contact (laid over the scene's; () opens the crack), progress}; returns the Run.
     #[rhai_fn(global, pure, return_raw)]
     pub fn transmit(
         ctx: NativeCallContext,

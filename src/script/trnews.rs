@@ -594,15 +594,7 @@ mod trnews_api {
             options(&ctx, settings, &ResponderOptions::default(), "responder")?;
         let dt_s = match o.step_fraction {
             None => scene.default_dt_s(),
-            Some(f) if f > 0.0 && f <= 1.0 => f * scene.stability.dt_crit_s,
-            Some(f) => {
-                return Err(super::error(
-                    &ctx,
-                    format!(
-                        "responder option step_fraction = {f}: must be in (0, 1] (dt as a fraction of dt_crit)"
-                    ),
-                ))
-            }
+            Some(f) => crate::solve::step_at_fraction(f, scene.stability.dt_crit_s).at(&ctx)?,
         };
         let r = Responder::with_step(scene, duration_s, dt_s).at(&ctx)?;
         match super::companions_wanted(&ctx, &r, o.error_estimate)? {

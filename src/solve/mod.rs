@@ -42,9 +42,24 @@ use std::time::Instant;
 pub use stepper::{drive, EnergySample, Fields, Observer, Stepper, Velocity};
 
 /// The default time step of every run as a fraction of its dt_crit (the Lanczos estimate is
-/// at or slightly above the true limit; 10% margin): `RunConfig::step_safety`, a scene's
+/// at or slightly above the true limit; 10% margin): `RunConfig::step_fraction`, a scene's
 /// default step, a script responder's `step_fraction`.
 pub const STEP_FRACTION: f64 = 0.9;
+
+/// The time step `fraction` x `dt_crit_s`, for a fraction in (0, 1]; otherwise an error
+/// naming `step_fraction`. The one check of a step given as a fraction of dt_crit (a run's
+/// and a responder's).
+pub fn step_at_fraction(fraction: f64, dt_crit_s: f64) -> Result<f64> {
+    if fraction > 0.0 && fraction <= 1.0 {
+        Ok(fraction * dt_crit_s)
+    } else {
+        Err(Error::invalid(
+            "step_fraction",
+            fraction,
+            "must be in (0, 1] (the time step as a fraction of dt_crit)",
+        ))
+    }
+}
 
 /// Which integrator advances the model.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Default)]
@@ -102,10 +117,10 @@ pub struct Receiver {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
-    /// Time step; `None` takes `step_safety * dt_crit` (explicit) (s).
+    /// Time step; `None` takes `step_fraction * dt_crit` (explicit) (s).
     pub dt_s: Option<f64>,
     /// Fraction of dt_crit used when `dt_s` is `None` (default [`STEP_FRACTION`]).
-    pub step_safety: f64,
+    pub step_fraction: f64,
     /// Simulated duration (s).
     pub duration_s: f64,
     /// Integrator.
@@ -154,7 +169,7 @@ impl Default for RunConfig {
     fn default() -> Self {
         RunConfig {
             dt_s: None,
-            step_safety: STEP_FRACTION,
+            step_fraction: STEP_FRACTION,
             duration_s: 60e-6,
             integrator: Integrator::Explicit,
             force: false,
@@ -338,13 +353,7 @@ fn validate(
     if let Some(dt) = config.dt_s {
         require_positive("dt_s", dt)?;
     }
-    if !(config.step_safety > 0.0 && config.step_safety <= 1.0) {
-        return Err(Error::invalid(
-            "step_safety",
-            config.step_safety,
-            "must be in (0, 1]",
-        ));
-    }
+    step_at_fraction(config.step_fraction, 1.0)?;
     if config.ledger_every == 0 {
         return Err(Error::invalid("ledger_every", 0, "must be at least 1"));
     }
@@ -660,7 +669,10 @@ impl<'a> Explicit<'a> {
         (sources, receivers): (&'a [Source], &[Receiver]),
         config: &RunConfig,
     ) -> Result<Explicit<'a>> {
-        let dt = config.dt_s.unwrap_or(config.step_safety * dt_crit_s);
+        let dt = match config.dt_s {
+            Some(dt) => dt,
+            None => step_at_fraction(config.step_fraction, dt_crit_s)?,
+        };
         let ratio = dt / dt_crit_s;
         if ratio > 1.0 && !config.force {
             return Err(Error::StepTooLarge {
