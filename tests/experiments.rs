@@ -83,7 +83,35 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
     );
     let convergence = std::fs::read_to_string(out.join("plots/convergence.csv")).unwrap();
     assert!(convergence.contains("cracked,0.5,") && convergence.contains("misfit"));
+    estimates_hold_against_the_reference(&out.join("plots/sem_target_estimate.csv"));
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The smoke preset's error estimate (companions along x and across) against the references
+/// of `sem_target.rhai`, which share no element size, order or step with it: every trace,
+/// uncracked and cracked (where the error along x falls slowly, the contact at GLL nodes),
+/// states an error within the factor 2 of the true one (measured 0.77-1.36).
+fn estimates_hold_against_the_reference(table: &std::path::Path) {
+    let text = std::fs::read_to_string(table).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (trace, verdict, ratio) = (
+        column("trace"),
+        column("verdict"),
+        column("estimate_vs_error"),
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 4, "{text}");
+    for row in rows {
+        assert_eq!(row[verdict], "reliable", "{}: {text}", row[trace]);
+        let r: f64 = row[ratio].parse().unwrap();
+        assert!(
+            (0.5..=2.0).contains(&r),
+            "{}: estimate / error = {r}",
+            row[trace]
+        );
+    }
 }
 
 #[test]
