@@ -539,10 +539,9 @@ struct SlowFall {
 /// with d_13 = |Q_p - Q_p-2| the third difference (`None` for a scalar, whose errors lie on
 /// one line: c = 1): a quadratic in c whose root in [-1, 1] ([`fitted_correlation`]) gives
 /// a = d_1 / sqrt(1 + rho^-2 - 2 c / rho). Aligned errors (c = 1, d_13 = d_1 + d_2) give the
-/// geometric tail
-/// d_1 rho / (1 - rho); uncorrelated ones (c = 0) d_1 rho / sqrt(1 + rho^2). On the default
-/// experiment's cracked traces the fitted c is 0.37-0.98 and the stated error 1.16-1.36x the
-/// error against the references (docs/src/validation/default-experiment.md).
+/// geometric tail d_1 rho / (1 - rho); uncorrelated ones (c = 0) d_1 rho / sqrt(1 + rho^2). On
+/// the default experiment's cracked traces the fitted c is 0.37-0.98 and the stated error
+/// 1.16-1.36x the error against the references (docs/src/validation/default-experiment.md).
 /// `None` when the differences do not fall by [`SLOWEST_FALL`] per order or no c in [-1, 1]
 /// fits them.
 fn slow_fall(d1: f64, d2: f64, d13: Option<f64>) -> Option<SlowFall> {
