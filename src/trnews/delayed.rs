@@ -54,10 +54,7 @@ pub fn delayed_tr_news(
     points: &[(Vec<f64>, Vec<f64>)],
     half_window_s: f64,
 ) -> Result<Vec<Delayed>> {
-    let max_delay_s = points
-        .iter()
-        .flat_map(|p| p.0.iter())
-        .fold(0.0f64, |m, d| m.max(*d));
+    let max_delay_s = longest_delay(points.iter().flat_map(|p| &p.0));
     delayed_tr_news_within(responder, tr, focus, points, half_window_s, max_delay_s)
 }
 
@@ -151,7 +148,7 @@ fn delayed_once(
                 signal::delay_and_sum(&focus.focused, delays, amplitudes)?,
                 simulation.len(),
             );
-            let last = delays.iter().fold(0.0f64, |m, d| m.max(*d));
+            let last = longest_delay(delays);
             let first = delays.iter().fold(f64::INFINITY, |m, d| m.min(*d));
             let window = (
                 tr.spec.window_s + first - half_window_s,
@@ -194,10 +191,7 @@ pub fn delayed_sweep(
         // run lists every delayed drive still to record.
         return Ok(delayed_tr_news(r, tr, focus, points, half_window_s)?);
     }
-    let max_delay_s = points
-        .iter()
-        .flat_map(|p| p.0.iter())
-        .fold(0.0f64, |m, d| m.max(*d));
+    let max_delay_s = longest_delay(points.iter().flat_map(|p| &p.0));
     let specs = point_specs(r, tr, focus, points, half_window_s, max_delay_s)?;
     let how = if r.simulates() {
         "simulated"
@@ -294,4 +288,9 @@ fn report_note(rep: &RunReport) -> String {
         " ({} steps, energy residual {:.1e}, dt/dt_crit {:.3}{contact})",
         rep.steps, rep.energy_residual_peak, rep.stability_ratio
     )
+}
+
+/// The longest of `delays` (s), 0 without any.
+fn longest_delay<'a>(delays: impl IntoIterator<Item = &'a f64>) -> f64 {
+    delays.into_iter().fold(0.0f64, |m, d| m.max(*d))
 }
