@@ -12,8 +12,9 @@
 //! then, if the error follows a power law, the estimate is within a factor 0.75..1.4 of the
 //! truth). When the differences shrink faster (q > p + 0.5) the same number is an upper
 //! bound of the error. Otherwise the runs are not in the asymptotic range, the verdict says
-//! "refine" and no error is claimed; so does a scalar whose differences change sign
-//! (oscillating convergence). Waves that travel many wavelengths converge late (their phase
+//! "refine" and no error is claimed; so does, on triangles, a scalar whose differences change
+//! sign (oscillating convergence; on spectral elements its errors along x alternate,
+//! `alternating` below). Waves that travel many wavelengths converge late (their phase
 //! error grows with distance), which is exactly when the check matters. On spectral elements
 //! a fall slower than that but of at least 16% per order (the contact at GLL nodes) gets a
 //! fitted tail instead (the slow-fall fit, `slow_fall` below).
@@ -47,6 +48,8 @@
 use crate::error::Result;
 use crate::signal::{self, Signal};
 use serde::{Deserialize, Serialize};
+
+mod propagated;
 
 /// How the two companions of an estimate are made from the main discretisation, which fixes
 /// the order of convergence the estimate expects.
@@ -113,6 +116,10 @@ pub enum Verdict {
     Refine,
     /// The quantity does not change between discretisations (to round-off).
     MeshIndependent,
+    /// A measure computed from waveforms (a misfit between two traces) whose own values do
+    /// not converge: `error` bounds it through the waveforms' stated errors
+    /// ([`Estimate::relative_misfit`]).
+    Propagated,
 }
 
 /// Where a discretisation error comes from.
@@ -188,7 +195,9 @@ impl Estimate {
     }
 
     /// A scalar whose differences change sign (Q_h - Q_2h against Q_2h - Q_4h) converges
-    /// with oscillation, not as a power law: its verdict is "refine" whatever the ratio.
+    /// with oscillation, not as a power law: on triangles its verdict is "refine" whatever
+    /// the ratio. On spectral elements its errors at the three orders alternate in sign
+    /// ([`alternating`]).
     fn with_scale(
         fine: f64,
         medium: f64,
@@ -200,14 +209,21 @@ impl Estimate {
         let (mut error, observed_order, mut verdict) =
             classify(d1.abs(), d2.abs(), scale, refinement.order());
         let mut slow_correlation = None;
-        if verdict != Verdict::MeshIndependent && d1 * d2 < 0.0 {
-            (error, verdict) = (None, Verdict::Refine);
-        } else if verdict == Verdict::Refine && refinement == Refinement::Orders {
-            // One number's errors at the three orders lie on one line: c = 1.
-            if let Some(tail) = slow_fall(d1.abs(), d2.abs(), None) {
-                (error, verdict, slow_correlation) =
-                    (Some(tail.error), Verdict::Reliable, Some(tail.correlation));
+        let sign_change = verdict != Verdict::MeshIndependent && d1 * d2 < 0.0;
+        match refinement {
+            Refinement::ElementSizes if sign_change => (error, verdict) = (None, Verdict::Refine),
+            Refinement::ElementSizes => {}
+            Refinement::Orders if sign_change => {
+                (error, verdict, slow_correlation) = alternating(d1.abs(), d2.abs(), verdict);
             }
+            Refinement::Orders if verdict == Verdict::Refine => {
+                // One number's errors at the three orders lie on one line: c = 1.
+                if let Some(tail) = slow_fall(d1.abs(), d2.abs(), Correlation::Known(1.0)) {
+                    (error, verdict, slow_correlation) =
+                        (Some(tail.error), Verdict::Reliable, Some(tail.correlation));
+                }
+            }
+            Refinement::Orders => {}
         }
         Estimate {
             waveform: false,
@@ -259,7 +275,7 @@ impl Estimate {
         let (mut error, observed_order, mut verdict) = classify(d1, d2, 1.0, refinement.order());
         let mut slow_correlation = None;
         if verdict == Verdict::Refine && refinement == Refinement::Orders {
-            if let Some(tail) = slow_fall(d1, d2, Some(d13)) {
+            if let Some(tail) = slow_fall(d1, d2, Correlation::FittedTo(d13)) {
                 (error, verdict) = (Some(tail.error), Verdict::Reliable);
                 slow_correlation = Some(tail.correlation);
             }
@@ -313,9 +329,10 @@ impl Estimate {
     }
 
     /// This estimate with the error across the layers `d` added (see the module doc) to a
-    /// stated error ([`Estimate::combined`]); as the whole error when the refinement's
-    /// companions agree (then the verdict is "reliable" unless `d` too is round-off of
-    /// `scale`); a "refine" stays one.
+    /// stated error ([`Estimate::combined`]), which is then an estimate ("reliable"), a bound
+    /// along x included, unless `d` is round-off of `scale`; as the whole error when the
+    /// refinement's companions agree (then too "reliable" unless `d` is round-off); a
+    /// "refine" stays one.
     fn with_across(mut self, d: f64, scale: f64) -> Estimate {
         self.across = Some(d);
         let e_y = ACROSS_TAIL * d;
@@ -323,7 +340,14 @@ impl Estimate {
             Verdict::MeshIndependent if d > ROUND_OFF * scale => {
                 (self.error, self.verdict) = (Some(e_y), Verdict::Reliable);
             }
-            Verdict::MeshIndependent | Verdict::Refine => {}
+            Verdict::MeshIndependent | Verdict::Refine | Verdict::Propagated => {}
+            // A bound along x plus the estimate across is an estimate: sqrt(2) d_y lies
+            // within sqrt(2) of the error across, either way (the smoke preset's cracked
+            // misfit, its error mostly across, is 1.3x the bound d_1 + sqrt(2) d_y).
+            Verdict::UpperBound if d > ROUND_OFF * scale => {
+                self.error = self.error.map(|e| self.combined(e, e_y));
+                self.verdict = Verdict::Reliable;
+            }
             Verdict::Reliable | Verdict::UpperBound => {
                 self.error = self.error.map(|e| self.combined(e, e_y));
             }
@@ -406,7 +430,7 @@ impl Estimate {
         if self.waveform {
             return match (self.verdict, self.error) {
                 (Verdict::Reliable, Some(e)) => format!("relative L2 error {e:.2e} ({detail})"),
-                (Verdict::UpperBound, Some(e)) => {
+                (Verdict::UpperBound | Verdict::Propagated, Some(e)) => {
                     format!("relative L2 error below {e:.2e} ({detail})")
                 }
                 (Verdict::MeshIndependent, _) => "unchanged between meshes".into(),
@@ -422,6 +446,10 @@ impl Estimate {
             (Verdict::UpperBound, Some(e)) => {
                 format!("{:.4e}, error below {e:.2e} ({detail})", self.value)
             }
+            (Verdict::Propagated, Some(e)) => format!(
+                "{:.4e}, error below {e:.2e} (bound from the errors of the traces it compares)",
+                self.value
+            ),
             (Verdict::MeshIndependent, _) => {
                 format!("{:.4e} (unchanged between meshes)", self.value)
             }
@@ -446,7 +474,9 @@ impl Estimate {
             };
             return match (self.verdict, self.error) {
                 (Verdict::Reliable, Some(e)) => format!("err {}{mostly}", pct(e)),
-                (Verdict::UpperBound, Some(e)) => format!("err < {}{mostly}", pct(e)),
+                (Verdict::UpperBound | Verdict::Propagated, Some(e)) => {
+                    format!("err < {}{mostly}", pct(e))
+                }
                 (Verdict::MeshIndependent, _) => "mesh-independent".into(),
                 _ => format!(
                     "err ? ({}: {})",
@@ -463,7 +493,7 @@ impl Estimate {
         };
         match (self.verdict, self.error) {
             (Verdict::Reliable, Some(e)) => format!("{v} +- {e:.1e}"),
-            (Verdict::UpperBound, Some(e)) => format!("{v} +- < {e:.1e}"),
+            (Verdict::UpperBound | Verdict::Propagated, Some(e)) => format!("{v} +- < {e:.1e}"),
             (Verdict::MeshIndependent, _) => format!("{v} (mesh-independent)"),
             _ => format!(
                 "{v} (err ?, {}: {change:.1e})",
@@ -520,6 +550,34 @@ fn relative_difference(fine: &Signal, other: &Signal, window: (f64, f64)) -> Res
 /// span too little of the fall for a tail to rest on them: "refine".
 pub const SLOWEST_FALL: f64 = 0.840_896_415_253_714_6;
 
+/// How the slow-fall fit takes the correlation c of consecutive orders' errors.
+#[derive(Clone, Copy, Debug)]
+enum Correlation {
+    /// Known: a scalar's errors lie on one line, aligned (c = 1) or alternating (c = -1).
+    Known(f64),
+    /// Fitted to the third difference d_13 = |Q_p - Q_p-2| of a waveform.
+    FittedTo(f64),
+}
+
+/// (error, verdict, correlation) of a scalar on spectral elements whose differences
+/// d_1 = Q_p - Q_p-1 and d_2 = Q_p-1 - Q_p-2 change sign (sizes `d1`, `d2`; `verdict` of
+/// [`classify`] on them): its errors along x alternate in sign, E_p-1 = -E_p / rho, the
+/// slow-fall model with c = -1 (the contact at GLL nodes moves the misfit of the cracked
+/// scene either way from one order to the next). Then d_1 = E_p (1 + 1 / rho): E_p =
+/// d_1 rho / (1 + rho), which is below d_1 whatever rho. At the expected halving per order
+/// that is d_1 / 3 ("reliable"); a faster fall gives the bound d_1 as for aligned errors; a
+/// slower one, to [`SLOWEST_FALL`], the tail at the observed rho; slower, "refine".
+fn alternating(d1: f64, d2: f64, verdict: Verdict) -> (Option<f64>, Verdict, Option<f64>) {
+    match verdict {
+        Verdict::Reliable => (Some(d1 / 3.0), Verdict::Reliable, Some(-1.0)),
+        Verdict::UpperBound => (Some(d1), Verdict::UpperBound, Some(-1.0)),
+        _ => match slow_fall(d1, d2, Correlation::Known(-1.0)) {
+            Some(tail) => (Some(tail.error), Verdict::Reliable, Some(-1.0)),
+            None => (None, Verdict::Refine, None),
+        },
+    }
+}
+
 /// The error along x at order p fitted to a slow fall, with the correlation it took.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct SlowFall {
@@ -536,22 +594,22 @@ struct SlowFall {
 ///
 ///   d_1^2 = a^2 (1 + rho^-2 - 2 c / rho),  d_13^2 = a^2 (1 + rho^-4 - 2 c^2 / rho^2),
 ///
-/// with d_13 = |Q_p - Q_p-2| the third difference (`None` for a scalar, whose errors lie on
-/// one line: c = 1): a quadratic in c whose root in [-1, 1] ([`fitted_correlation`]) gives
-/// a = d_1 / sqrt(1 + rho^-2 - 2 c / rho). Aligned errors (c = 1, d_13 = d_1 + d_2) give the
+/// with d_13 = |Q_p - Q_p-2| the third difference: a quadratic in c whose root in [-1, 1]
+/// ([`fitted_correlation`]) gives a = d_1 / sqrt(1 + rho^-2 - 2 c / rho). A scalar's errors
+/// lie on one line: c = 1 (aligned) or -1 (alternating, [`alternating`]), known. Aligned errors (c = 1, d_13 = d_1 + d_2) give the
 /// geometric tail d_1 rho / (1 - rho); uncorrelated ones (c = 0) d_1 rho / sqrt(1 + rho^2). On
 /// the default experiment's cracked traces the fitted c is 0.37-0.98 and the stated error
 /// 1.16-1.36x the error against the references (docs/src/validation/default-experiment.md).
 /// `None` when the differences do not fall by [`SLOWEST_FALL`] per order or no c in [-1, 1]
 /// fits them.
-fn slow_fall(d1: f64, d2: f64, d13: Option<f64>) -> Option<SlowFall> {
+fn slow_fall(d1: f64, d2: f64, correlation: Correlation) -> Option<SlowFall> {
     if !(d1 > 0.0 && d2 > 0.0 && d1 <= SLOWEST_FALL * d2) {
         return None;
     }
     let rho = d1 / d2;
-    let correlation = match d13 {
-        None => 1.0,
-        Some(d13) => fitted_correlation(rho, (d13 / d1).powi(2))?,
+    let correlation = match correlation {
+        Correlation::Known(c) => c,
+        Correlation::FittedTo(d13) => fitted_correlation(rho, (d13 / d1).powi(2))?,
     };
     let spread = 1.0 + 1.0 / (rho * rho) - 2.0 * correlation / rho;
     (spread > 0.0).then(|| SlowFall {
@@ -698,10 +756,35 @@ mod tests {
         let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), Refinement::ElementSizes).unwrap();
         assert_eq!(e.verdict, Verdict::Refine, "{e:?}");
         // No correlation fits differences with d_13 > d_1 + d_2 (not a triangle).
-        assert!(slow_fall(1.0, 1.3, Some(2.5)).is_none());
-        // A scalar whose differences change sign oscillates: refine, fall or not.
-        let e = Estimate::scalar(1.003, 1.007, 1.002, Refinement::Orders);
+        assert!(slow_fall(1.0, 1.3, Correlation::FittedTo(2.5)).is_none());
+        // A scalar whose differences change sign and grow: refine.
+        let e = Estimate::scalar(1.003, 1.007, 1.004, Refinement::Orders);
         assert_eq!(e.verdict, Verdict::Refine, "{e:?}");
+    }
+
+    /// A scalar whose errors along x alternate in sign, E_p = a (-rho)^(p - 7): the tail
+    /// d_1 rho / (1 + rho) is exact at a slow fall, d_1 / 3 at a halving, the bound d_1 at a
+    /// faster fall; on triangles the same values say "refine".
+    #[test]
+    fn a_scalars_alternating_errors_along_x() {
+        for (rho, verdict, stated) in [
+            (0.8, Verdict::Reliable, 1.0),
+            (0.5, Verdict::Reliable, 1.0),
+            (0.1, Verdict::UpperBound, 11.0),
+        ] {
+            let a = 2e-3;
+            let q = |p: i32| 0.05 + a * (-1.0f64 / rho).powi(7 - p);
+            let e = Estimate::scalar(q(7), q(6), q(5), Refinement::Orders);
+            assert_eq!(e.verdict, verdict, "rho {rho}: {e:?}");
+            assert_eq!(e.slow_correlation, Some(-1.0));
+            let error = e.error.unwrap();
+            assert!(
+                (error / (stated * a) - 1.0).abs() < 1e-9,
+                "rho {rho}: {error} vs {a}"
+            );
+            let t3 = Estimate::scalar(q(7), q(6), q(5), Refinement::ElementSizes);
+            assert_eq!(t3.verdict, Verdict::Refine);
+        }
     }
 
     #[test]

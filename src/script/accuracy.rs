@@ -144,12 +144,13 @@ mod accuracy_api {
         e.companions.iter().map(|&v| Dynamic::from(v)).collect()
     }
 
-    /// "reliable", "upper_bound" (converging faster than order 2: `error` bounds it), "refine" (not in the asymptotic range: no error claimed) or "mesh_independent".
+    /// "reliable", "upper_bound" (converging faster than the scheme's order: `error` bounds it), "propagated_bound" (a misfit whose own values do not converge: `error` bounds it through the errors of the traces it compares), "refine" (not in the asymptotic range: no error claimed) or "mesh_independent".
     #[rhai_fn(global, get = "verdict", pure)]
     pub fn verdict(e: &mut Estimate) -> String {
         match e.verdict {
             Verdict::Reliable => "reliable",
             Verdict::UpperBound => "upper_bound",
+            Verdict::Propagated => "propagated_bound",
             Verdict::Refine => "refine",
             Verdict::MeshIndependent => "mesh_independent",
         }
@@ -184,7 +185,9 @@ mod accuracy_api {
         };
         match (e.verdict, e.error) {
             (Verdict::MeshIndependent, _) => "met (unchanged between meshes)".to_string(),
-            (Verdict::Reliable | Verdict::UpperBound, Some(err)) if relative(err) <= tolerance => {
+            (Verdict::Reliable | Verdict::UpperBound | Verdict::Propagated, Some(err))
+                if relative(err) <= tolerance =>
+            {
                 format!("met: {} <= {tolerance}", e.describe())
             }
             (Verdict::Reliable, Some(_)) => format!("not met: {} > {tolerance}", e.describe()),

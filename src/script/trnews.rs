@@ -645,7 +645,7 @@ mod trnews_api {
         f.pi_residual().map_or(Dynamic::UNIT, Dynamic::from)
     }
 
-    /// Error estimates of a delayed point as #{misfit, peak_difference, simulation}, or () without an error estimate.
+    /// Error estimates of a delayed point as #{misfit, peak_difference, simulation, prediction, residual} (the traces over the misfit window, relative L2; the misfit's error bounded from theirs where its own values do not converge), or () without an error estimate.
     #[rhai_fn(global, get = "estimates", pure)]
     pub fn delayed_estimates(d: &mut Delayed) -> Dynamic {
         d.estimates.as_ref().map_or(Dynamic::UNIT, |e| {
@@ -653,6 +653,8 @@ mod trnews_api {
                 ("misfit", e.misfit),
                 ("peak_difference", e.peak_difference),
                 ("simulation", e.simulation),
+                ("prediction", e.prediction),
+                ("residual", e.residual),
             ])
         })
     }

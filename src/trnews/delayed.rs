@@ -3,7 +3,7 @@
 
 use super::channel::{to_record_of, truncate, Responder};
 use super::focus::{Focus, TrNews};
-use crate::accuracy::Estimate;
+use crate::accuracy::{Estimate, Refinement};
 use crate::error::{Error, Result};
 use crate::signal::{self, Signal};
 use crate::solve::RunReport;
@@ -34,15 +34,20 @@ pub struct Delayed {
     pub estimates: Option<DelayedEstimates>,
 }
 
-/// Richardson estimates of a delayed TR-NEWS point (see [`crate::accuracy`]).
+/// Error estimates of a delayed TR-NEWS point (see [`crate::accuracy`]).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct DelayedEstimates {
-    /// The misfit.
+    /// The misfit: its own estimate, or a bound from the errors of the traces it compares
+    /// where its own values do not converge ([`Estimate::relative_misfit`]).
     pub misfit: Estimate,
-    /// The peak difference.
+    /// The peak difference (Richardson, from its own values).
     pub peak_difference: Estimate,
     /// The simulated trace over the misfit window (relative L2).
     pub simulation: Estimate,
+    /// The linear prediction over the misfit window (relative L2).
+    pub prediction: Estimate,
+    /// The residual simulation - prediction over the misfit window (relative L2).
+    pub residual: Estimate,
 }
 
 /// Delayed TR-NEWS for several (delays, amplitudes) points, simulated in parallel, and on
@@ -92,19 +97,36 @@ pub fn delayed_tr_news_within(
         let runs: Vec<&Delayed> = std::iter::once(&*d)
             .chain(companions.iter().map(|c| &c[k]))
             .collect();
-        let values = |q: fn(&Delayed) -> f64| -> Vec<f64> { runs.iter().map(|x| q(x)).collect() };
-        let simulations: Vec<&Signal> = runs.iter().map(|x| &x.simulation).collect();
-        let estimates = DelayedEstimates {
-            misfit: Estimate::dimensionless_of(&values(|x| x.misfit), refinement)?,
-            peak_difference: Estimate::dimensionless_of(
-                &values(|x| x.peak_difference),
-                refinement,
-            )?,
-            simulation: Estimate::waveform_of(&simulations, d.window_s, refinement)?,
-        };
-        d.estimates = Some(estimates);
+        d.estimates = Some(estimates_of(&runs, refinement)?);
     }
     Ok(main)
+}
+
+/// The estimates of a point from its `runs` on the main discretisation and its companions,
+/// over the main run's misfit window.
+fn estimates_of(runs: &[&Delayed], refinement: Refinement) -> Result<DelayedEstimates> {
+    let window = runs[0].window_s;
+    let values = |q: fn(&Delayed) -> f64| -> Vec<f64> { runs.iter().map(|x| q(x)).collect() };
+    let traces =
+        |q: fn(&Delayed) -> &Signal| -> Vec<&Signal> { runs.iter().map(|x| q(x)).collect() };
+    let residuals = runs
+        .iter()
+        .map(|x| x.simulation.sub(&x.prediction))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let simulation = Estimate::waveform_of(&traces(|x| &x.simulation), window, refinement)?;
+    let prediction = Estimate::waveform_of(&traces(|x| &x.prediction), window, refinement)?;
+    let residual =
+        Estimate::waveform_of(&residuals.iter().collect::<Vec<_>>(), window, refinement)?;
+    let norm = |s: &Signal| -> Result<f64> { Ok(s.window(window.0, window.1)?.energy().sqrt()) };
+    let size_ratio = norm(&runs[0].simulation)? / norm(&runs[0].prediction)?;
+    let own = Estimate::dimensionless_of(&values(|x| x.misfit), refinement)?;
+    Ok(DelayedEstimates {
+        misfit: Estimate::relative_misfit(own, &simulation, &prediction, &residual, size_ratio),
+        peak_difference: Estimate::dimensionless_of(&values(|x| x.peak_difference), refinement)?,
+        simulation,
+        prediction,
+        residual,
+    })
 }
 
 /// Delayed TR-NEWS for several (delays, amplitudes) points, simulated in parallel.
