@@ -1,28 +1,26 @@
 //! Errors of a measure computed from waveforms, propagated from the waveforms' stated errors.
 //!
 //! The delayed TR-NEWS misfit m = ||s - p|| / ||p|| (simulation s, linear prediction p, over
-//! the focus window) of a cracked scene is the norm of a small residual r = s - p, the contact's
-//! nonlinearity. Its own values at orders p, p-1, p-2 along x usually converge, and its own
-//! estimate (along x and across the layers) is stated: within a factor 2 of its distance to the
-//! references on the smoke preset (0.77 and 1.44; `scripts/sem_target.rhai`, piece `misfit`). But the contact
-//! acts at GLL nodes whose places change with the order, and the residual is a few percent of
-//! the traces, so the three misfits may scatter (differences that change sign or grow: "refine"
-//! in most cracked rows of the quick sweep before this bound). The traces themselves converge,
-//! and their stated errors are checked against references. With the absolute errors
-//! E_r = ||r_h - r|| and E_p = ||p_h - p|| of the computed residual and prediction, the
-//! triangle inequality bounds the misfit's error:
+//! the focus window) of a cracked scene is the norm of a small residual r = s - p, the
+//! contact's nonlinearity. Its own values at orders p, p-1, p-2 along x usually converge, and
+//! its own estimate (along x and across the layers) is stated: 0.77 and 1.44 of its distance
+//! to the references on the smoke preset (`scripts/sem_target.rhai`, piece `misfit`). But the
+//! contact acts at GLL nodes whose places change with the order, and the residual is a few
+//! percent of the traces, so the three misfits may scatter (differences that grow: "refine").
+//! The traces themselves converge, and their stated errors are checked against references.
+//! With the absolute errors E_r = ||r_h - r|| and E_p = ||p_h - p|| of the computed residual
+//! and prediction, the triangle inequality bounds the misfit's error:
 //!
 //!   |m_h - m| <= (E_r + m_h E_p) / (||p_h|| - E_p) = (E_r / ||p_h|| + m_h e_p) / (1 - e_p),
 //!
 //! e_p = E_p / ||p_h|| the prediction's relative error. E_r is estimated by e_r ||r_h|| (the
 //! residual's own estimate) and is at most e_s ||s_h|| + E_p (the two traces' errors, as
-//! r_h - r = (s_h - s) - (p_h - p)); the smaller is used, where the misfit's own estimate
-//! says "refine". It holds as far as
-//! the traces' estimates hold (within 2x of their true errors on every check). It is loose:
-//! the simulation's and the prediction's errors are mostly one error (the same wave through the
-//! same layers), which cancels in r, and the bound adds them. On the smoke preset, where the
-//! own estimate holds, the bound through the traces is 11-17x the misfit's distance to the
-//! references.
+//! r_h - r = (s_h - s) - (p_h - p)); the smaller is used, where the misfit's own estimate says
+//! "refine". It holds as far as the traces' estimates hold (within 2x of their true errors on
+//! every check). It is loose: the simulation's and the prediction's errors are mostly one
+//! error (the same wave through the same layers), which cancels in r, and the bound adds them.
+//! On the smoke preset, where the own estimate holds, the bound through the traces is 11-17x
+//! the misfit's distance to the references.
 
 use super::{Estimate, Verdict};
 
@@ -139,18 +137,18 @@ mod tests {
         for dr in &directions {
             for dp in &directions {
                 for (sr, sp) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0)] {
-                    // r_h = r + E_r dr, p_h = p + E_p dp (absolute errors of the stated sizes)
-                    let ph: Vec<f64> = p
+                    // the true p and r: the computed ones plus errors of the stated sizes
+                    let p_true: Vec<f64> = p
                         .iter()
                         .zip(dp)
                         .map(|(a, d)| a + sp * e_p * norm(&p) * d)
                         .collect();
-                    let rh: Vec<f64> = r
+                    let r_true: Vec<f64> = r
                         .iter()
                         .zip(dr)
                         .map(|(a, d)| a + sr * e_r * norm(&r) * d)
                         .collect();
-                    let moved = (norm(&rh) / norm(&ph) - m).abs();
+                    let moved = (norm(&r_true) / norm(&p_true) - m).abs();
                     largest = largest.max(moved);
                 }
             }
