@@ -157,10 +157,10 @@ mod tests {
         assert!(largest >= 0.95 * bound, "{largest} vs {bound}");
     }
 
-    /// Through the traces (a residual without a stated error) the bound is e_s ||s|| / ||p||
-    /// + e_p plus m e_p, over 1 - e_p; a misfit whose own estimate states an error (a
-    /// converging one, a linear scene's round-off) keeps it; without a stated prediction error
-    /// there is no bound.
+    /// Through the traces (a residual without a stated error) the bound is
+    /// (e_s ||s|| / ||p|| + e_p + m e_p) / (1 - e_p); with both routes the smaller; a misfit
+    /// whose own estimate states an error (a converging one, a linear scene's round-off)
+    /// keeps it; without a stated prediction error there is no bound.
     #[test]
     fn traces_route_own_estimates_and_missing_errors() {
         let own = Estimate::dimensionless(0.1, 0.103, 0.101, Refinement::Orders);
