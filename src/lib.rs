@@ -14,6 +14,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accuracy;
+pub mod attenuation;
 pub mod budget;
 pub mod contact;
 pub mod error;

@@ -6,6 +6,7 @@
 //! `eps_33 = 0` by `S'_ij = S_ij - S_i3 S_j3 / S_33`. The result is inverted to the stiffness
 //! `C` (Voigt order xx, yy, xy with engineering shear) and must be positive definite.
 
+use crate::attenuation::Relaxation;
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -63,8 +64,12 @@ pub struct Material {
     pub name: String,
     /// Density (kg/m^3).
     pub density_kg_m3: f64,
-    /// Plane stiffness in Voigt order (xx, yy, xy), engineering shear strain (Pa).
+    /// Plane stiffness in Voigt order (xx, yy, xy), engineering shear strain (Pa); of a
+    /// viscoelastic material the unrelaxed (infinite-frequency) one.
     pub stiffness_pa: [[f64; 3]; 3],
+    /// The relaxation of a viscoelastic material ([`crate::attenuation`]); `None`: elastic.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub relaxation: Option<Relaxation>,
 }
 
 /// The largest elastic modulus accepted (Pa; see [`Orthotropic::check_constants`]).
@@ -227,6 +232,7 @@ impl Orthotropic {
             name: self.name.clone(),
             density_kg_m3: self.density_kg_m3,
             stiffness_pa: [[c11, c12, 0.0], [c12, c22, 0.0], [0.0, 0.0, self.g12_pa]],
+            relaxation: None,
         })
     }
 }

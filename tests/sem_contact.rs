@@ -443,6 +443,7 @@ fn bilinear(eps: f64) -> (SemModel, f64, f64) {
         name: "stop".into(),
         density_kg_m3: eps * base.density_kg_m3,
         stiffness_pa: base.stiffness_pa.map(|row| row.map(|c| 3.0 * c)),
+        relaxation: None,
     };
     let mut m = SemModel::new(
         vec![0.0, w],

@@ -19,7 +19,10 @@ use crate::solve::{Quantity, Receiver, StabilityEstimate};
 /// [`super::DiscretisationSpec::Sem`]).
 pub(super) fn build(spec: &SceneSpec, cut: &SemSpec) -> Result<Scene> {
     check_options(spec, cut)?;
-    let laminate = build_laminate(&spec.laminate, spec.plane)?;
+    let mut laminate = build_laminate(&spec.laminate, spec.plane)?;
+    if let Some(attenuation) = &spec.attenuation {
+        crate::attenuation::attenuate(&mut laminate.materials, attenuation)?;
+    }
     check_mesh_size(
         spec,
         &laminate,

@@ -1,6 +1,7 @@
 //! What a scene is made of, as data: the laminate, the transmitter, sources and receivers, the
 //! edges, the crack and the discretisation (the fields of a Rhai scene map or a JSON spec).
 
+use crate::attenuation::AttenuationSpec;
 use crate::contact::ContactOptions;
 use crate::error::{Error, Result};
 use crate::laminate::StochasticSpec;
@@ -414,6 +415,10 @@ pub struct SceneSpec {
     /// ([`SceneSpec::companions`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time_step_s: Option<f64>,
+    /// Losses: quality factors per material over a band ([`AttenuationSpec`]); `None` (the
+    /// default): every material elastic, as in the report.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub attenuation: Option<AttenuationSpec>,
 }
 
 /// The time-dispersion transforms of a scene's runs ([`crate::solve::time_dispersion`]):
@@ -560,6 +565,7 @@ impl Default for SceneSpec {
             transducer: Some(TransducerSpec::default()),
             time_dispersion: Some(TimeDispersionSpec::default()),
             time_step_s: None,
+            attenuation: None,
             transmitter: TransmitterSpec::default(),
             sources: vec![],
             receivers: ReceiverSpec::default(),

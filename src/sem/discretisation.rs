@@ -36,6 +36,18 @@ impl Discretisation for SemModel {
     fn check(&self) -> Result<()> {
         SemModel::check(self)
     }
+    fn shortest_relaxation_s(&self) -> Option<f64> {
+        SemModel::shortest_relaxation_s(self)
+    }
+    fn start_memory(&self, dt: f64, u_prev: &[f64], work: &mut SemWorkspace) {
+        SemModel::start_memory(self, dt, u_prev, work);
+    }
+    fn take_viscous_loss(&self, work: &mut SemWorkspace) -> f64 {
+        SemModel::take_viscous_loss(self, work)
+    }
+    fn memory_energy(&self, u: &[f64], work: &mut SemWorkspace) -> f64 {
+        SemModel::memory_energy(self, u, work)
+    }
     fn stiffness_times(&self, u: &[f64], out: &mut [f64], work: &mut SemWorkspace) {
         SemModel::stiffness_times(self, u, out, work);
     }

@@ -24,6 +24,7 @@ mod discretisation;
 mod even_odd;
 pub mod gll;
 mod layered;
+mod memory;
 
 pub use layered::SemSpec;
 
@@ -33,6 +34,7 @@ use crate::material::Material;
 use crate::mesh::Crack;
 use even_odd::EvenOdd;
 use gll::Gll;
+use memory::{Elastic, PointLaw, RowMemory, Viscous};
 use rayon::prelude::*;
 
 /// The layered rectangle as spectral elements: element lines, orders, materials, nodes and
@@ -121,6 +123,9 @@ type Lanes = [f64; LANES];
 pub struct SemWorkspace {
     rows: Vec<RowWork>,
     springs: SpringLines,
+    /// The memory variables of each element row, `Some` where its material is viscoelastic;
+    /// empty until a time step starts them ([`SemModel::start_memory`]).
+    memory: Vec<Option<RowMemory>>,
 }
 
 #[derive(Clone, Debug)]
@@ -368,6 +373,7 @@ impl SemModel {
         SemWorkspace {
             rows,
             springs: SpringLines::new(self),
+            memory: Vec::new(),
         }
     }
 
@@ -437,10 +443,24 @@ impl SemModel {
         if work.springs.springs != self.springs {
             work.springs = SpringLines::new(self);
         }
-        let SemWorkspace { rows, springs } = work;
-        rows.par_iter_mut()
-            .enumerate()
-            .for_each(|(r, row)| self.row_forces(r, u, row));
+        let SemWorkspace {
+            rows,
+            springs,
+            memory,
+        } = work;
+        if predictor.is_some() && !memory.is_empty() {
+            rows.par_iter_mut()
+                .zip(memory.par_iter_mut())
+                .enumerate()
+                .for_each(|(r, (row, memory))| match memory {
+                    Some(m) => self.row_forces::<Viscous>(r, u, row, m),
+                    None => self.row_forces::<Elastic>(r, u, row, &mut ()),
+                });
+        } else {
+            rows.par_iter_mut()
+                .enumerate()
+                .for_each(|(r, row)| self.row_forces::<Elastic>(r, u, row, &mut ()));
+        }
         // springs, then the predictor, on a line of K u starting at DOF `first`
         let finish = |first: usize, line: &mut [f64], springs: &[(usize, f64)]| {
             for &(d, k) in springs {
@@ -534,11 +554,11 @@ impl SemModel {
     /// number of points along x (so its loops over them have fixed length; the order was
     /// checked against [`MAX_ORDER`] when the model was built), and with AVX where the CPU
     /// has it (wider lanes, the same operations: bit-identical results).
-    fn row_forces(&self, r: usize, u: &[f64], row: &mut RowWork) {
+    fn row_forces<L: PointLaw>(&self, r: usize, u: &[f64], row: &mut RowWork, law: &mut L::State) {
         macro_rules! by_points {
             ($($n:literal)*) => {
                 match self.gll_x.order() + 1 {
-                    $($n => self.row_forces_dispatch::<$n>(r, u, row),)*
+                    $($n => self.row_forces_dispatch::<$n, L>(r, u, row, law),)*
                     n => unreachable!("{n} GLL points along x: above MAX_ORDER + 1"),
                 }
             };
@@ -546,40 +566,66 @@ impl SemModel {
         by_points!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
     }
 
-    fn row_forces_dispatch<const N: usize>(&self, r: usize, u: &[f64], row: &mut RowWork) {
+    fn row_forces_dispatch<const N: usize, L: PointLaw>(
+        &self,
+        r: usize,
+        u: &[f64],
+        row: &mut RowWork,
+        law: &mut L::State,
+    ) {
         #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports AVX-512F (checked just above), the only requirement
             // of this target_feature function.
-            return unsafe { self.row_forces_avx512::<N>(r, u, row) };
+            return unsafe { self.row_forces_avx512::<N, L>(r, u, row, law) };
         }
         #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
         if std::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU supports AVX (checked just above), the only requirement of
             // this target_feature function.
-            return unsafe { self.row_forces_avx::<N>(r, u, row) };
+            return unsafe { self.row_forces_avx::<N, L>(r, u, row, law) };
         }
-        self.row_kernel::<N>(r, u, row);
+        self.row_kernel::<N, L>(r, u, row, law);
     }
 
     #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
     #[target_feature(enable = "avx512f")]
-    fn row_forces_avx512<const N: usize>(&self, r: usize, u: &[f64], row: &mut RowWork) {
-        self.row_kernel::<N>(r, u, row);
+    fn row_forces_avx512<const N: usize, L: PointLaw>(
+        &self,
+        r: usize,
+        u: &[f64],
+        row: &mut RowWork,
+        law: &mut L::State,
+    ) {
+        self.row_kernel::<N, L>(r, u, row, law);
     }
 
     #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
     #[target_feature(enable = "avx")]
-    fn row_forces_avx<const N: usize>(&self, r: usize, u: &[f64], row: &mut RowWork) {
-        self.row_kernel::<N>(r, u, row);
+    fn row_forces_avx<const N: usize, L: PointLaw>(
+        &self,
+        r: usize,
+        u: &[f64],
+        row: &mut RowWork,
+        law: &mut L::State,
+    ) {
+        self.row_kernel::<N, L>(r, u, row, law);
     }
 
     /// The elements of row `r`, `LANES` columns at a time: displacements gathered into
     /// lanes ([`SemModel::gather`]), weighted stresses ([`SemModel::stresses`]), nodal
     /// forces into the row's force lines ([`SemModel::scatter_forces`]). Every line of the
-    /// row's forces is written (no zeroing pass needed).
+    /// row's forces is written (no zeroing pass needed). The point law `L` adds what the
+    /// material does beyond W C_U eps (nothing for [`Elastic`]); a law without forces stops
+    /// at the stresses.
     #[inline(always)]
-    fn row_kernel<const N: usize>(&self, r: usize, u: &[f64], row: &mut RowWork) {
+    fn row_kernel<const N: usize, L: PointLaw>(
+        &self,
+        r: usize,
+        u: &[f64],
+        row: &mut RowWork,
+        law: &mut L::State,
+    ) {
         let points = N * (self.gll_y[r].order() + 1);
         let RowWork {
             force,
@@ -593,9 +639,12 @@ impl SemModel {
         let (a1, a2) = (&mut across_1[..points], &mut across_2[..points]);
         for (g, jx) in self.half_width.iter().enumerate() {
             self.gather::<N>(r, g * LANES, u, ux, uy);
-            self.stresses::<N>(r, jx, [ux, uy], [a1, a2], mirrored, [sxx, syy, sxy]);
-            let stresses = [&*sxx, &*syy, &*sxy];
-            self.scatter_forces::<N>(r, g * LANES, jx, stresses, [a1, a2], mirrored, force);
+            let fields = ([&*ux, &*uy], [&mut *a1, &mut *a2], &mut mirrored[..]);
+            self.stresses::<N, L>(r, jx, fields, [sxx, syy, sxy], (law, g * points));
+            if L::FORCES {
+                let stresses = [&*sxx, &*syy, &*sxy];
+                self.scatter_forces::<N>(r, g * LANES, jx, stresses, [a1, a2], mirrored, force);
+            }
         }
     }
 
@@ -660,16 +709,17 @@ impl SemModel {
     /// (by [`EvenOdd`]; the derivatives across the row into `across`), the strains
     /// eps = (u_x,xi / jx, u_y,eta / jy, u_x,eta / jy + u_y,xi / jx), and W C eps with
     /// W = w_a w_b jx jy; every operation across the lanes (the group's elements, each with its
-    /// own jx).
+    /// own jx); then the point law at each point, the group's first point being the row's
+    /// point `first` (`law` = (its state, first)).
+    #[allow(clippy::type_complexity)]
     #[inline(always)]
-    fn stresses<const N: usize>(
+    fn stresses<const N: usize, L: PointLaw>(
         &self,
         r: usize,
         jx: &Lanes,
-        [ux, uy]: [&[Lanes]; 2],
-        [ux_eta, uy_eta]: [&mut [Lanes]; 2],
-        mirrored: &mut [Lanes],
+        ([ux, uy], [ux_eta, uy_eta], mirrored): ([&[Lanes]; 2], [&mut [Lanes]; 2], &mut [Lanes]),
         [sxx, syy, sxy]: [&mut [Lanes]; 3],
+        (law, first): (&mut L::State, usize),
     ) {
         let nby = ux.len() / N;
         self.derivative_y[r].apply_across::<N>(ux, mirrored, ux_eta);
@@ -707,6 +757,8 @@ impl SemModel {
                         s[l] = weight[l] * (c[0] * e_xx[l] + c[1] * e_yy[l] + c[2] * g_xy[l]);
                     }
                 }
+                let stress = [&mut sxx[p], &mut syy[p], &mut sxy[p]];
+                L::at_point(law, first + p, &weight, [&e_xx, &e_yy, &g_xy], stress);
             }
         }
     }

@@ -61,6 +61,36 @@ pub trait Discretisation: Sync {
         ))
     }
 
+    /// The shortest relaxation time of the body's viscoelastic materials (s), `None` where
+    /// every material is elastic (the default): the step must follow it
+    /// ([`crate::attenuation::check_step`]).
+    fn shortest_relaxation_s(&self) -> Option<f64> {
+        None
+    }
+
+    /// Starts the memory variables of viscoelastic materials for a central-difference run at
+    /// step `dt` from u_{-1} = `u_prev` (eps_{-1} from it, e_{l,-1} = 0); from then on
+    /// [`Discretisation::explicit_update`] updates them and adds their stress. Nothing to do
+    /// for an elastic body (the default).
+    fn start_memory(&self, dt: f64, u_prev: &[f64], work: &mut Self::Workspace) {
+        let _ = (dt, u_prev, work);
+    }
+
+    /// The energy the relaxation dissipated in the updates since the last call (J per m of
+    /// thickness); 0 for an elastic body (the default).
+    fn take_viscous_loss(&self, work: &mut Self::Workspace) -> f64 {
+        let _ = work;
+        0.0
+    }
+
+    /// What the memory variables add to the stored energy at t_{n-1/2}, from u_n = `u` and the
+    /// memory after step n - 1 (left unchanged; `crate::sem`'s memory module derives it);
+    /// 0 for an elastic body (the default).
+    fn memory_energy(&self, u: &[f64], work: &mut Self::Workspace) -> f64 {
+        let _ = (u, work);
+        0.0
+    }
+
     /// The central-difference predictor u_next = 2 u - u_prev - a .* (K u) (report eq 69 with
     /// a = dt^2 / m). A discretisation may fuse it into its stiffness kernel (one pass over
     /// memory); the default forms K u in `u_next` and combines in place.

@@ -184,9 +184,11 @@ impl<'a, D: Discretisation, C: ContactLaw> CentralDifference<'a, D, C> {
             }
         }
         contact.start(&u);
+        let mut work = body.workspace();
+        body.start_memory(dt, &u_prev, &mut work);
         CentralDifference {
             body,
-            work: body.workspace(),
+            work,
             coef,
             dt,
             sources,
@@ -233,6 +235,7 @@ impl<D: Discretisation, C: ContactLaw> Stepper for CentralDifference<'_, D, C> {
         let u_next = &mut self.u_next;
         self.body
             .explicit_update(a, u_prev, u, u_next, &mut self.work);
+        self.flows.viscous_loss += self.body.take_viscous_loss(&mut self.work);
         for (weights, values) in self.sources.iter() {
             let f = values[step];
             if f != 0.0 {
@@ -270,7 +273,8 @@ impl<D: Discretisation, C: ContactLaw> Stepper for CentralDifference<'_, D, C> {
     }
 
     /// Energy at t_{n-1/2}: kinetic 1/2 v^T M v with v = (u_n - u_{n-1})/dt, strain
-    /// 1/2 u_{n-1}^T K u_n ([`energy_sums`], with K u_n as the buffer).
+    /// 1/2 u_{n-1}^T K u_n ([`energy_sums`], with K u_n as the buffer), and the memory
+    /// variables' share ([`Discretisation::memory_energy`]).
     fn energy(&mut self, step: usize) -> EnergySample {
         let (dt, u_prev, u) = (self.dt, &self.u_prev, &self.u);
         let ku = &mut self.ku;
@@ -281,6 +285,7 @@ impl<D: Discretisation, C: ContactLaw> Stepper for CentralDifference<'_, D, C> {
             time_s: (step as f64 - 0.5) * dt,
             kinetic_j: 0.5 * kinetic,
             strain_j: 0.5 * strain,
+            memory_j: self.body.memory_energy(u, &mut self.work),
             flows: self.flows,
         }
     }

@@ -251,6 +251,7 @@ impl<D: Discretisation> Stepper for FourthOrder<'_, D> {
             time_s: (step as f64 - 0.5) * dt,
             kinetic_j: 0.5 * kinetic,
             strain_j: 0.5 * strain,
+            memory_j: 0.0,
             flows: self.flows,
         }
     }

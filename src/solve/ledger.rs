@@ -1,6 +1,9 @@
 //! The energy ledger of report Sec. 4.10.1: kinetic + strain + dashpot loss + contact loss
-//! = initial energy + source work; its residual is every run's first error indicator.
+//! = initial energy + source work; its residual is every run's first error indicator. A scene
+//! with losses adds the energy its memory variables hold and what the relaxation dissipated
+//! ([`crate::attenuation`]).
 
+use super::stepper::EnergySample;
 use serde::Serialize;
 
 /// Energy time series (J per metre of thickness) and the balance residual.
@@ -20,6 +23,13 @@ pub struct EnergyLedger {
     pub contact_loss_j: Vec<f64>,
     /// Of `contact_loss_j`, the part done by the tangential (friction) forces.
     pub friction_loss_j: Vec<f64>,
+    /// Energy held by the memory variables beyond the unrelaxed strain energy (may be
+    /// negative; absent from the output of elastic scenes, where it is zero).
+    #[serde(skip_serializing_if = "all_zero")]
+    pub memory_j: Vec<f64>,
+    /// Cumulative energy dissipated by the materials' relaxation (absent where zero).
+    #[serde(skip_serializing_if = "all_zero")]
+    pub viscous_loss_j: Vec<f64>,
     /// (kinetic + strain + losses - initial - source work) / (initial + max |source work|).
     pub residual: Vec<f64>,
     /// Energy at the start (from initial conditions).
@@ -37,15 +47,29 @@ pub struct Flows {
     pub contact_normal_work: f64,
     /// Work done by the tangential (friction) contact forces.
     pub contact_tangential_work: f64,
+    /// Energy dissipated by the materials' relaxation.
+    pub viscous_loss: f64,
+}
+
+fn all_zero(values: &[f64]) -> bool {
+    values.iter().all(|&v| v == 0.0)
 }
 
 impl EnergyLedger {
     /// Appends a sample; returns its relative residual.
-    pub fn push(&mut self, time_s: f64, kinetic: f64, strain: f64, flows: &Flows) -> f64 {
+    pub fn push(&mut self, sample: &EnergySample) -> f64 {
+        let EnergySample {
+            time_s,
+            kinetic_j: kinetic,
+            strain_j: strain,
+            memory_j: memory,
+            ref flows,
+        } = *sample;
         let contact_loss = -(flows.contact_normal_work + flows.contact_tangential_work);
-        let imbalance = kinetic + strain + flows.dashpot_loss + contact_loss
-            - self.initial_j
-            - flows.source_work;
+        let imbalance =
+            kinetic + strain + memory + flows.dashpot_loss + contact_loss + flows.viscous_loss
+                - self.initial_j
+                - flows.source_work;
         let max_work = self
             .source_work_j
             .iter()
@@ -59,6 +83,8 @@ impl EnergyLedger {
         self.dashpot_loss_j.push(flows.dashpot_loss);
         self.contact_loss_j.push(contact_loss);
         self.friction_loss_j.push(-flows.contact_tangential_work);
+        self.memory_j.push(memory);
+        self.viscous_loss_j.push(flows.viscous_loss);
         self.residual.push(residual);
         residual
     }

@@ -309,6 +309,13 @@ fn run_validated<D: Discretisation>(
         crack: body.crack(),
         node_x: &node_x,
     };
+    if body.shortest_relaxation_s().is_some() && config.integrator != Integrator::Explicit {
+        return Err(Error::invalid(
+            "integrator",
+            format!("{:?}", config.integrator),
+            "losses (memory variables) are implemented for the explicit integrator so far",
+        ));
+    }
     match config.integrator {
         Integrator::Explicit | Integrator::FourthOrder => {
             central_difference(body, shape, dt_crit_s, io, config, setup)
@@ -673,6 +680,9 @@ impl<'a> Explicit<'a> {
             Some(dt) => dt,
             None => step_at_fraction(config.step_fraction, dt_crit_s)?,
         };
+        if let Some(tau) = disc.shortest_relaxation_s() {
+            crate::attenuation::check_step(tau, dt)?;
+        }
         let ratio = dt / dt_crit_s;
         if ratio > 1.0 && !config.force {
             return Err(Error::StepTooLarge {

@@ -383,6 +383,7 @@ impl Stepper for Newmark<'_> {
             time_s: step as f64 * self.dt,
             kinetic_j: kinetic,
             strain_j: strain,
+            memory_j: 0.0,
             flows: self.flows,
         }
     }

@@ -71,7 +71,7 @@ impl LedgerMonitor {
     pub fn new(stepper: &mut dyn Stepper, every: usize, dt_crit_s: f64) -> Self {
         let e = stepper.energy(0);
         let ledger = EnergyLedger {
-            initial_j: e.kinetic_j + e.strain_j,
+            initial_j: e.kinetic_j + e.strain_j + e.memory_j,
             ..EnergyLedger::default()
         };
         LedgerMonitor {
@@ -102,8 +102,7 @@ impl LedgerMonitor {
         if e.kinetic_j > BLOW_UP_FACTOR * budget && e.kinetic_j > 0.0 {
             return Err(unstable(format!("kinetic energy {:.3e} J/m grew above {BLOW_UP_FACTOR} times the energy put in ({budget:.3e} J/m)", e.kinetic_j)));
         }
-        self.ledger
-            .push(e.time_s, e.kinetic_j, e.strain_j, &e.flows);
+        self.ledger.push(&e);
         Ok(())
     }
 }

@@ -90,8 +90,11 @@ pub struct EnergySample {
     pub time_s: f64,
     /// 1/2 v^T M v.
     pub kinetic_j: f64,
-    /// 1/2 u^T K u (central differences: 1/2 u_{n-1}^T K u_n).
+    /// 1/2 u^T K u (central differences: 1/2 u_{n-1}^T K u_n), K of the unrelaxed stiffness.
     pub strain_j: f64,
+    /// What the memory variables of viscoelastic materials add to the stored energy
+    /// ([`super::Discretisation::memory_energy`]); 0 without losses.
+    pub memory_j: f64,
     /// Work of sources, dashpots and contact so far.
     pub flows: Flows,
 }
