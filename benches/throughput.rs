@@ -96,6 +96,21 @@ struct Report {
     sweep: Vec<SweepRow>,
     sem: Vec<SemRow>,
     scene: Vec<SceneRow>,
+    losses: Vec<LossRow>,
+}
+
+/// The quick preset's cracked scene on spectral elements with the literature's losses
+/// ([`trnews::attenuation::AttenuationSpec::report_materials`]) against without: the memory
+/// variables' cost, one transmission, same step.
+#[derive(Serialize)]
+struct LossRow {
+    dofs: usize,
+    threads: usize,
+    steps: usize,
+    elastic_ms_per_step: f64,
+    viscous_ms_per_step: f64,
+    /// viscous / elastic - 1, percent.
+    extra_percent: f64,
 }
 
 /// One transmission of the real scene, the quick preset's cracked default scene on spectral
@@ -342,7 +357,7 @@ fn triad(n: usize, threads: usize, reps: usize) -> f64 {
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    // --only SECTION (bandwidth, assembly, step, crack, sweep, sem, scene) runs one section, for profiling.
+    // --only SECTION (bandwidth, assembly, step, crack, sweep, sem, scene, losses) runs one section, for profiling.
     let args: Vec<String> = std::env::args().collect();
     let only = args
         .iter()
@@ -790,8 +805,58 @@ fn main() {
         }
     }
 
+    // --- losses ------------------------------------------------------------------------------
+    let mut loss_rows = Vec::new();
+    if run_section("losses") {
+        let elastic = Scene::build(&SceneSpec::preset(Resolution::Quick)).expect("quick preset");
+        let viscous = Scene::build(&SceneSpec {
+            attenuation: Some(trnews::attenuation::AttenuationSpec::report_materials()),
+            ..SceneSpec::preset(Resolution::Quick)
+        })
+        .expect("quick preset with losses");
+        let dt = elastic.default_dt_s().min(viscous.default_dt_s());
+        let steps = if quick { 100 } else { 1000 };
+        let reps = if quick { 1 } else { 3 };
+        let drive = chirp_signal(dt, steps, elastic.spec.transmitter.peak_pa);
+        let config = RunConfig {
+            progress: false,
+            dt_s: Some(dt),
+            ..elastic.run_config(steps as f64 * dt)
+        };
+        println!(
+            "\nLosses: the quick preset's cracked scene ({} DOFs) with and without memory variables, one transmission of {steps} steps at the same step (best of {reps}):",
+            elastic.dofs()
+        );
+        for &threads in &thread_counts {
+            let p = pool(threads);
+            let (mut best_elastic, mut best_viscous) = (f64::INFINITY, f64::INFINITY);
+            // interleaved, so that machine noise hits both alike
+            for _ in 0..reps {
+                for (scene, best) in [(&elastic, &mut best_elastic), (&viscous, &mut best_viscous)]
+                {
+                    let out = p.install(|| scene.transmit(&drive, &config).expect("transmit"));
+                    *best = best.min(out.report.wall_time_s);
+                }
+            }
+            let row = LossRow {
+                dofs: elastic.dofs(),
+                threads,
+                steps,
+                elastic_ms_per_step: best_elastic * 1e3 / steps as f64,
+                viscous_ms_per_step: best_viscous * 1e3 / steps as f64,
+                extra_percent: 100.0 * (best_viscous / best_elastic - 1.0),
+            };
+            println!(
+                "  {threads} thread(s): elastic {:8.3} ms/step, with losses {:8.3} ms/step (+{:.0}%)",
+                row.elastic_ms_per_step, row.viscous_ms_per_step, row.extra_percent
+            );
+            loss_rows.push(row);
+        }
+    }
+
     let report = Report {
         quick,
+        losses: loss_rows,
         scene: scene_rows,
         sem: sem_rows,
         sweep: sweep_rows,

@@ -30,7 +30,7 @@
 //! and the spectral-element order rule see the stiffest operator.
 
 use crate::error::{Error, Result};
-use crate::material::Material;
+use crate::material::{relative_modulus, Material, Relaxation, RelaxingPart};
 use nalgebra::{DMatrix, DVector};
 use rustfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -63,6 +63,40 @@ pub struct QualitySpec {
     pub q_s: f64,
 }
 
+impl AttenuationSpec {
+    /// Losses of the report's materials over the report's band (0.2-2 MHz), 3 mechanisms,
+    /// the constants holding at the band's geometric centre. The quality factors are read
+    /// second-hand, from the material list of the Dispersion Calculator (A. Huber, DLR;
+    /// `MaterialList_Isotropic.txt`, `MaterialList_Orthotropic.txt`), which stores losses
+    /// per wavelength alpha_lambda (Q = pi / alpha_lambda) or as complex moduli
+    /// (Q = Re / Im), without a frequency:
+    /// - epoxy: entry `Epoxy_Ono_2020_Viscoelastic` (attributed to K. Ono, Appl. Sci. 10,
+    ///   2020), 0.0867 Np/wavelength for P and 0.1636 for S: Q_P = 36, Q_S = 19. The same
+    ///   list's `Epoxy_Disperse_Viscoelastic` (0.04, 0.1) gives 79 and 31: the lossier entry
+    ///   is taken.
+    /// - the fabric plies: entry `CarbonEpoxy_Castaings_Viscoelastic`, a unidirectional
+    ///   carbon/epoxy ply with a 2% imaginary part on every modulus: Q = 50 for P and S. The
+    ///   list's `CarbonEpoxy_Hernando_2015_Viscoelastic` is 6x less lossy (Q 300-400);
+    ///   woven and cross-ply laminates attenuate more than unidirectional ones.
+    ///
+    /// Ono's tables were not read here: treat these as a plausible lossy end of the range,
+    /// not as measurements of the report's specimen.
+    pub fn report_materials() -> AttenuationSpec {
+        let q = |q_p, q_s| QualitySpec { q_p, q_s };
+        AttenuationSpec {
+            band_hz: [2e5, 2e6],
+            mechanisms: default_mechanisms(),
+            reference_hz: None,
+            quality: [
+                ("epoxy".to_string(), q(36.0, 19.0)),
+                ("fabric_0_90".to_string(), q(50.0, 50.0)),
+                ("fabric_45_45".to_string(), q(50.0, 50.0)),
+            ]
+            .into(),
+        }
+    }
+}
+
 fn default_mechanisms() -> usize {
     3
 }
@@ -76,31 +110,6 @@ const MAX_Q_ERROR: f64 = 0.02;
 /// Largest dt / tau_l: the trapezoidal memory update sees w as (2/dt) tan(w dt/2), within 1%
 /// of w up to w dt = 0.35 (tan(0.175)/0.175 = 1.0103).
 pub const MAX_STEP_PER_TAU: f64 = 0.35;
-
-/// A material's relaxation: the mechanisms' times and the two parts of its unrelaxed
-/// stiffness with their weights (module docs).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Relaxation {
-    /// Relaxation times tau_l (s), one per mechanism.
-    pub tau_s: Vec<f64>,
-    /// The two parts of C_U, each with its own Q.
-    pub parts: [RelaxingPart; 2],
-}
-
-/// One part C_k of an unrelaxed stiffness and the weights y_kl of its mechanisms.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct RelaxingPart {
-    /// Which part: "normal", "shear", "bulk" or "deviatoric".
-    pub name: &'static str,
-    /// C_k, unrelaxed (Pa, Voigt order).
-    pub stiffness_pa: [[f64; 3]; 3],
-    /// y_kl, one per mechanism.
-    pub weights: Vec<f64>,
-    /// The Q fitted.
-    pub quality: f64,
-    /// Largest |Q(w)/Q - 1| over the band.
-    pub quality_error: f64,
-}
 
 /// Relaxation times tau_l = 1/(2 pi f_l), f_l log-spaced over the band widened by a fifth of
 /// its log-width at each end: with L = 3 over a decade the fit then holds Q within 0.3%,
@@ -117,14 +126,6 @@ pub fn relaxation_times([f1, f2]: [f64; 2], mechanisms: usize) -> Vec<f64> {
             1.0 / (2.0 * PI * f)
         })
         .collect()
-}
-
-/// The relative modulus M(w)/M_U = 1 - sum_l y_l / (1 + i w tau_l) of one part.
-pub fn relative_modulus(omega: f64, tau_s: &[f64], weights: &[f64]) -> Complex64 {
-    let one = Complex64::new(1.0, 0.0);
-    tau_s.iter().zip(weights).fold(one, |m, (&tau, &y)| {
-        m - y / Complex64::new(1.0, omega * tau)
-    })
 }
 
 /// Frequencies (Hz) log-spaced over `band`, `n` of them, ends included.
@@ -172,41 +173,6 @@ pub fn unrelaxed_scale(omega_ref: f64, tau_s: &[f64], weights: &[f64]) -> f64 {
 pub fn plane_wave(rho: f64, modulus: Complex64, omega: f64) -> (f64, f64) {
     let k = omega * (rho / modulus).sqrt();
     (omega / k.re, -k.im)
-}
-
-impl Relaxation {
-    /// The complex stiffness at `omega`: sum_k C_k [1 - sum_l y_kl / (1 + i w tau_l)].
-    pub fn stiffness_at(&self, omega: f64) -> [[Complex64; 3]; 3] {
-        let mut c = [[Complex64::new(0.0, 0.0); 3]; 3];
-        for part in &self.parts {
-            let m = relative_modulus(omega, &self.tau_s, &part.weights);
-            for (row, part_row) in c.iter_mut().zip(&part.stiffness_pa) {
-                for (cij, &kij) in row.iter_mut().zip(part_row) {
-                    *cij += m * kij;
-                }
-            }
-        }
-        c
-    }
-
-    /// DC_l = sum_k y_kl C_k, the stiffness mechanism `l` relaxes (Pa).
-    pub fn relaxed_by(&self, l: usize) -> [[f64; 3]; 3] {
-        let mut dc = [[0.0; 3]; 3];
-        for part in &self.parts {
-            for (row, part_row) in dc.iter_mut().zip(&part.stiffness_pa) {
-                for (d, &k) in row.iter_mut().zip(part_row) {
-                    *d += part.weights[l] * k;
-                }
-            }
-        }
-        dc
-    }
-
-    /// The shortest relaxation time (s): the step must keep dt / tau below
-    /// [`MAX_STEP_PER_TAU`].
-    pub fn shortest_tau_s(&self) -> f64 {
-        self.tau_s.iter().copied().fold(f64::INFINITY, f64::min)
-    }
 }
 
 /// Checks a run's step against the shortest relaxation time of its materials: an error
@@ -400,6 +366,8 @@ fn is_isotropic(c: &[[f64; 3]; 3]) -> bool {
 fn add(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     std::array::from_fn(|i| std::array::from_fn(|j| a[i][j] + b[i][j]))
 }
+
+pub(crate) mod memory;
 
 #[cfg(test)]
 mod tests;

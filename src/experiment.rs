@@ -1,9 +1,11 @@
 //! The setup every experiment takes from its command line (`--set NAME=VALUE`), defined once:
-//! the resolution preset, the discretisation, the error estimate and a requested accuracy.
+//! the resolution preset, the discretisation, the error estimate, a requested accuracy and
+//! whether the materials have losses.
 //! Each has one default here ([`Experiment::default`]); a script may state its own default
 //! for a study that is about something else (the triangles' convergence, say), never a second
 //! parser.
 
+use crate::attenuation::AttenuationSpec;
 use crate::error::{Error, Result};
 use crate::scene::{DiscretisationKind, Resolution, SceneSpec};
 use crate::trnews::{ErrorEstimate, TrNewsSpec};
@@ -25,6 +27,10 @@ pub struct Experiment {
     /// the error estimate checks it after the run. `None`: the preset's sizes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tolerance: Option<f64>,
+    /// Losses in the plies and the epoxy: the literature's quality factors
+    /// ([`AttenuationSpec::report_materials`]); off by default, as in the report.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub losses: bool,
 }
 
 impl Default for Experiment {
@@ -36,17 +42,19 @@ impl Default for Experiment {
             discretisation: DiscretisationKind::default(),
             error_estimate: ErrorEstimate::Auto,
             tolerance: None,
+            losses: false,
         }
     }
 }
 
 impl Experiment {
     /// The names of the setup's parameters, as `--set` takes them.
-    pub const PARAMETERS: [&'static str; 4] = [
+    pub const PARAMETERS: [&'static str; 5] = [
         "resolution",
         "discretisation",
         "error_estimate",
         "tolerance",
+        "losses",
     ];
 
     /// Sets parameter `name` from the text the user wrote; an unknown name or a value the
@@ -57,6 +65,7 @@ impl Experiment {
             "discretisation" => self.discretisation = text.parse()?,
             "error_estimate" => self.error_estimate = text.parse()?,
             "tolerance" => self.tolerance = Some(tolerance(text)?),
+            "losses" => self.losses = switch("losses", text)?,
             other => {
                 return Err(Error::invalid(
                     "experiment parameter",
@@ -73,10 +82,13 @@ impl Experiment {
         TrNewsSpec::preset(self.resolution)
     }
 
-    /// The preset scene (cracked) on the chosen discretisation, before any refinement for the
-    /// tolerance.
+    /// The preset scene (cracked) on the chosen discretisation, with the losses when asked,
+    /// before any refinement for the tolerance.
     pub fn scene_spec(&self) -> SceneSpec {
-        SceneSpec::preset_on(self.resolution, self.discretisation)
+        SceneSpec {
+            attenuation: self.losses.then(AttenuationSpec::report_materials),
+            ..SceneSpec::preset_on(self.resolution, self.discretisation)
+        }
     }
 
     /// The error estimate the runs get: always on when a tolerance is asked for, since the
@@ -86,6 +98,15 @@ impl Experiment {
             Some(_) => ErrorEstimate::On,
             None => self.error_estimate,
         }
+    }
+}
+
+/// `true` or `false` as written, for parameter `name`.
+fn switch(name: &str, text: &str) -> Result<bool> {
+    match text.trim() {
+        "true" => Ok(true),
+        "false" => Ok(false),
+        _ => Err(Error::invalid(name, text, "expected true or false")),
     }
 }
 
@@ -120,6 +141,8 @@ mod tests {
         e.set("resolution", "smoke").unwrap();
         e.set("discretisation", "t3").unwrap();
         e.set("error_estimate", "false").unwrap();
+        e.set("losses", "true").unwrap();
+        assert!(e.scene_spec().attenuation.is_some());
         assert_eq!(e.estimate(), ErrorEstimate::Off);
         e.set("tolerance", "0.05").unwrap();
         assert_eq!(e.tolerance, Some(0.05));
@@ -135,6 +158,7 @@ mod tests {
             ("tolerance", "0", "tolerance"),
             ("tolerance", "1.5", "1.5"),
             ("tolerance", "NaN", "NaN"),
+            ("losses", "yes", "yes"),
             ("order", "7", "order"),
         ] {
             let message = e.set(name, text).unwrap_err().to_string();

@@ -6,8 +6,8 @@
 //! `eps_33 = 0` by `S'_ij = S_ij - S_i3 S_j3 / S_33`. The result is inverted to the stiffness
 //! `C` (Voigt order xx, yy, xy with engineering shear) and must be positive definite.
 
-use crate::attenuation::Relaxation;
 use crate::error::{Error, Result};
+use rustfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 /// Which 2D idealisation reduces the 3D material.
@@ -273,6 +273,74 @@ impl Material {
     /// The plane stiffness as a positive-definite check result, for materials built directly.
     pub fn is_positive_definite(&self) -> bool {
         is_positive_definite(&self.stiffness_pa)
+    }
+}
+
+/// A material's relaxation: the mechanisms' times and the two parts of its unrelaxed
+/// stiffness with their weights ([`crate::attenuation`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Relaxation {
+    /// Relaxation times tau_l (s), one per mechanism.
+    pub tau_s: Vec<f64>,
+    /// The two parts of C_U, each with its own Q.
+    pub parts: [RelaxingPart; 2],
+}
+
+/// One part C_k of an unrelaxed stiffness and the weights y_kl of its mechanisms.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RelaxingPart {
+    /// Which part: "normal", "shear", "bulk" or "deviatoric".
+    pub name: &'static str,
+    /// C_k, unrelaxed (Pa, Voigt order).
+    pub stiffness_pa: [[f64; 3]; 3],
+    /// y_kl, one per mechanism.
+    pub weights: Vec<f64>,
+    /// The Q fitted.
+    pub quality: f64,
+    /// Largest |Q(w)/Q - 1| over the band.
+    pub quality_error: f64,
+}
+
+/// The relative modulus M(w)/M_U = 1 - sum_l y_l / (1 + i w tau_l) of one part.
+pub fn relative_modulus(omega: f64, tau_s: &[f64], weights: &[f64]) -> Complex64 {
+    let one = Complex64::new(1.0, 0.0);
+    tau_s.iter().zip(weights).fold(one, |m, (&tau, &y)| {
+        m - y / Complex64::new(1.0, omega * tau)
+    })
+}
+
+impl Relaxation {
+    /// The complex stiffness at `omega`: sum_k C_k [1 - sum_l y_kl / (1 + i w tau_l)].
+    pub fn stiffness_at(&self, omega: f64) -> [[Complex64; 3]; 3] {
+        let mut c = [[Complex64::new(0.0, 0.0); 3]; 3];
+        for part in &self.parts {
+            let m = relative_modulus(omega, &self.tau_s, &part.weights);
+            for (row, part_row) in c.iter_mut().zip(&part.stiffness_pa) {
+                for (cij, &kij) in row.iter_mut().zip(part_row) {
+                    *cij += m * kij;
+                }
+            }
+        }
+        c
+    }
+
+    /// DC_l = sum_k y_kl C_k, the stiffness mechanism `l` relaxes (Pa).
+    pub fn relaxed_by(&self, l: usize) -> [[f64; 3]; 3] {
+        let mut dc = [[0.0; 3]; 3];
+        for part in &self.parts {
+            for (row, part_row) in dc.iter_mut().zip(&part.stiffness_pa) {
+                for (d, &k) in row.iter_mut().zip(part_row) {
+                    *d += part.weights[l] * k;
+                }
+            }
+        }
+        dc
+    }
+
+    /// The shortest relaxation time (s): the step must keep dt / tau below
+    /// [`crate::attenuation::MAX_STEP_PER_TAU`].
+    pub fn shortest_tau_s(&self) -> f64 {
+        self.tau_s.iter().copied().fold(f64::INFINITY, f64::min)
     }
 }
 

@@ -1,5 +1,6 @@
 //! Rhai module `experiment`: the setup every experiment script takes from `--set`
-//! ([`crate::experiment::Experiment`]: resolution, discretisation, error_estimate, tolerance;
+//! ([`crate::experiment::Experiment`]: resolution, discretisation, error_estimate, tolerance,
+//! losses;
 //! and the channel, [`crate::script::channel`]), read in this one place. Type: `Experiment`.
 //!
 //! Every value is validated when the setup is read, but a parameter counts as read (see
@@ -55,7 +56,7 @@ mod experiment_api {
 
     type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
 
-    /// The experiment's setup from `--set`: resolution = quick (default) | paper | smoke; discretisation = sem (default) | t3; error_estimate = auto (default: on where the companions cost at most 30% extra) | true | false; tolerance = a relative error of the first-pass responses (triangles' element sizes refined to meet it; turns the estimate on to check it). A bad value is an error naming the parameter and the value.
+    /// The experiment's setup from `--set`: resolution = quick (default) | paper | smoke; discretisation = sem (default) | t3; error_estimate = auto (default: on where the companions cost at most 30% extra) | true | false; tolerance = a relative error of the first-pass responses (triangles' element sizes refined to meet it; turns the estimate on to check it); losses = false (default, as in the report) | true (the literature's quality factors of the plies and the epoxy, spectral elements only). A bad value is an error naming the parameter and the value.
     #[rhai_fn(return_raw)]
     pub fn setup(ctx: NativeCallContext) -> Res<Experiment> {
         read_setup(&ctx, Map::new())
@@ -79,6 +80,13 @@ mod experiment_api {
     pub fn discretisation(ctx: NativeCallContext, e: &mut Experiment) -> Res<Dynamic> {
         uses(&ctx, &["discretisation"])?;
         to_dynamic(&ctx, &e.discretisation)
+    }
+
+    /// Whether the preset scene's materials have losses (`losses`, off by default).
+    #[rhai_fn(global, get = "losses", pure, return_raw)]
+    pub fn losses(ctx: NativeCallContext, e: &mut Experiment) -> Res<bool> {
+        uses(&ctx, &["losses"])?;
+        Ok(e.losses)
     }
 
     /// The error estimate the runs get: true, false or "auto" (true whenever a tolerance is given).
@@ -111,7 +119,10 @@ mod experiment_api {
     /// The preset scene of the setup with `overrides` (fields of a scene spec, as `scene::preset`), refined for its tolerance when one is given.
     #[rhai_fn(global, pure, name = "scene", return_raw)]
     pub fn scene_with(ctx: NativeCallContext, e: &mut Experiment, overrides: Map) -> Res<SceneRef> {
-        uses(&ctx, &["resolution", "discretisation", "tolerance"])?;
+        uses(
+            &ctx,
+            &["resolution", "discretisation", "tolerance", "losses"],
+        )?;
         let scene = crate::script::scene::build(&ctx, overrides, e.scene_spec())?;
         match e.tolerance {
             None => Ok(scene),

@@ -30,11 +30,11 @@ pub use layered::SemSpec;
 
 use crate::error::{Error, Result};
 
+use crate::attenuation::memory::{Elastic, PointLaw, RowMemory, Viscous};
 use crate::material::Material;
 use crate::mesh::Crack;
 use even_odd::EvenOdd;
 use gll::Gll;
-use memory::{Elastic, PointLaw, RowMemory, Viscous};
 use rayon::prelude::*;
 
 /// The layered rectangle as spectral elements: element lines, orders, materials, nodes and
@@ -125,7 +125,7 @@ pub struct SemWorkspace {
     springs: SpringLines,
     /// The memory variables of each element row, `Some` where its material is viscoelastic;
     /// empty until a time step starts them ([`SemModel::start_memory`]).
-    memory: Vec<Option<RowMemory>>,
+    memory: Vec<Option<RowMemory<LANES>>>,
 }
 
 #[derive(Clone, Debug)]
@@ -554,7 +554,13 @@ impl SemModel {
     /// number of points along x (so its loops over them have fixed length; the order was
     /// checked against [`MAX_ORDER`] when the model was built), and with AVX where the CPU
     /// has it (wider lanes, the same operations: bit-identical results).
-    fn row_forces<L: PointLaw>(&self, r: usize, u: &[f64], row: &mut RowWork, law: &mut L::State) {
+    fn row_forces<L: PointLaw<LANES>>(
+        &self,
+        r: usize,
+        u: &[f64],
+        row: &mut RowWork,
+        law: &mut L::State,
+    ) {
         macro_rules! by_points {
             ($($n:literal)*) => {
                 match self.gll_x.order() + 1 {
@@ -566,7 +572,7 @@ impl SemModel {
         by_points!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
     }
 
-    fn row_forces_dispatch<const N: usize, L: PointLaw>(
+    fn row_forces_dispatch<const N: usize, L: PointLaw<LANES>>(
         &self,
         r: usize,
         u: &[f64],
@@ -590,7 +596,7 @@ impl SemModel {
 
     #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
     #[target_feature(enable = "avx512f")]
-    fn row_forces_avx512<const N: usize, L: PointLaw>(
+    fn row_forces_avx512<const N: usize, L: PointLaw<LANES>>(
         &self,
         r: usize,
         u: &[f64],
@@ -602,7 +608,7 @@ impl SemModel {
 
     #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
     #[target_feature(enable = "avx")]
-    fn row_forces_avx<const N: usize, L: PointLaw>(
+    fn row_forces_avx<const N: usize, L: PointLaw<LANES>>(
         &self,
         r: usize,
         u: &[f64],
@@ -619,7 +625,7 @@ impl SemModel {
     /// material does beyond W C_U eps (nothing for [`Elastic`]); a law without forces stops
     /// at the stresses.
     #[inline(always)]
-    fn row_kernel<const N: usize, L: PointLaw>(
+    fn row_kernel<const N: usize, L: PointLaw<LANES>>(
         &self,
         r: usize,
         u: &[f64],
@@ -713,7 +719,7 @@ impl SemModel {
     /// point `first` (`law` = (its state, first)).
     #[allow(clippy::type_complexity)]
     #[inline(always)]
-    fn stresses<const N: usize, L: PointLaw>(
+    fn stresses<const N: usize, L: PointLaw<LANES>>(
         &self,
         r: usize,
         jx: &Lanes,

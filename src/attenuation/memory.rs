@@ -1,0 +1,263 @@
+//! Memory variables of viscoelastic materials at the quadrature points of a discretisation
+//! (`W` points side by side: a lane group of spectral elements, or one triangle), and the
+//! point laws a stress kernel is compiled with: [`Elastic`] (nothing beyond W C_U eps:
+//! elastic rows run today's code), [`Viscous`] (the memory update and its stress, in the time
+//! step), [`Start`] (the memory at the first step) and [`Probe`] (the ledger's memory energy,
+//! read without changing the state).
+//!
+//! The update is the trapezoidal rule on tau_l e_l' + e_l = eps (bilinear, A-stable):
+//!
+//!   e_{l,n} = alpha_l e_{l,n-1} + beta_l (eps_{n-1} + eps_n),
+//!   alpha_l = (2 tau_l - dt) / (2 tau_l + dt),  beta_l = dt / (2 tau_l + dt),
+//!
+//! i.e. tau_l (e_{l,n} - e_{l,n-1}) / dt = (a_{n-1} + a_n) / 2 with a = eps - e_l, the strain
+//! of the mechanism's spring. With central differences it keeps an exact discrete energy
+//! balance (docs/src/physics.md, "Losses"): at t_{n-1/2} the stored energy is the elastic
+//! sample of C_U plus
+//!
+//!   MEM_{n-1/2} = sum_q W_q sum_l [ 1/2 a_n.DC_l a_{n-1} - 1/2 eps_n.DC_l eps_{n-1}
+//!                                   + dt/(4 tau_l) a_{n-1}.DC_l (a_{n-1} + a_n) ],
+//!
+//! and the step n dissipates dt d_{n-1/2}, d = sum_q W_q sum_l (1/tau_l) abar.DC_l abar with
+//! abar = (a_{n-1} + a_n) / 2 >= 0, so E_{n+1/2} - E_{n-1/2} + dt d_{n-1/2} is the work of the
+//! external forces over the step, to round-off.
+
+use crate::material::Relaxation;
+
+/// W values, one per element of a lane group (spectral elements) or one value (W = 1).
+pub(crate) type Lanes<const W: usize> = [f64; W];
+
+/// What the row kernel does at a GLL point beyond the elastic weighted stress W C_U eps.
+pub(crate) trait PointLaw<const W: usize> {
+    /// What the law reads and writes per element row.
+    type State;
+    /// Whether the kernel goes on to the nodal forces (laws that only read fields do not).
+    const FORCES: bool = true;
+    /// At point `q` of the row (point p of lane group g: q = g P + p, P points per element),
+    /// of weight W (w_a w_b jx jy) and strain `eps` (xx, yy, engineering xy): adjusts the
+    /// weighted stress `s`, W C_U eps on entry.
+    fn at_point(
+        state: &mut Self::State,
+        q: usize,
+        weight: &Lanes<W>,
+        eps: [&Lanes<W>; 3],
+        s: [&mut Lanes<W>; 3],
+    );
+}
+
+/// No memory: the stress stays W C_U eps.
+pub(crate) struct Elastic;
+
+impl<const W: usize> PointLaw<W> for Elastic {
+    type State = ();
+    #[inline(always)]
+    fn at_point(_: &mut (), _: usize, _: &Lanes<W>, _: [&Lanes<W>; 3], _: [&mut Lanes<W>; 3]) {}
+}
+
+/// The memory update of a time step and its stress, s -= W sum_l DC_l e_{l,n}, with the
+/// step's loss W sum_l (1/tau_l) abar.DC_l abar added up.
+pub(crate) struct Viscous;
+
+/// The memory at the first step: eps_{-1} from u_{-1}, e_{l,-1} = 0.
+pub(crate) struct Start;
+
+/// MEM_{n-1/2} (module docs) from u_n and the state after step n - 1, into
+/// [`RowMemory::energy`]; the state is left as it was.
+pub(crate) struct Probe;
+
+/// One relaxation mechanism's constants at the run's step.
+#[derive(Clone, Debug)]
+struct Mechanism {
+    alpha: f64,
+    beta: f64,
+    /// dt / (4 tau_l), of the memory energy.
+    dt_over_4tau: f64,
+    /// DC_l = sum_k y_kl C_k (Pa).
+    relaxed: Block,
+    /// DC_l / tau_l, of the loss (Pa/s).
+    dissipative: Block,
+}
+
+/// A plane stiffness that does not couple the normal strains to the shear strain, as every
+/// part of [`crate::attenuation`]'s splits: [C11, C12, C22, C66].
+type Block = [f64; 4];
+
+/// The block of a 3x3 stiffness (its entries coupling normal and shear strain are zero).
+fn block(c: &[[f64; 3]; 3]) -> Block {
+    debug_assert!(c[0][2] == 0.0 && c[1][2] == 0.0 && c[2][0] == 0.0 && c[2][1] == 0.0);
+    [c[0][0], c[0][1], c[1][1], c[2][2]]
+}
+
+/// The memory of a set of quadrature points of one viscoelastic material (an element row of
+/// spectral elements by lane group, or a chunk of triangles): per point the previous strain
+/// and the mechanisms' e_l, the mechanisms' constants, and the loss and energy sums per lane.
+#[derive(Clone, Debug)]
+pub(crate) struct RowMemory<const W: usize> {
+    /// eps_{n-1} at point q, `[q]`.
+    eps_prev: Vec<[Lanes<W>; 3]>,
+    /// e_{l,n-1} at point q, `[q * L + l]`.
+    e: Vec<[Lanes<W>; 3]>,
+    mechanisms: Vec<Mechanism>,
+    /// The step.
+    dt: f64,
+    /// d = W sum_l (1/tau_l) abar.DC_l abar per lane, summed over the steps since it was
+    /// taken (times dt: the energy dissipated).
+    loss: Lanes<W>,
+    /// The memory energy of the last [`Probe`], per lane.
+    energy: Lanes<W>,
+}
+
+impl<const W: usize> RowMemory<W> {
+    /// Zero memory for `points` quadrature points (of W lanes each) of a material relaxing
+    /// as `relaxation`, at step `dt`.
+    pub(crate) fn new(relaxation: &Relaxation, points: usize, dt: f64) -> Self {
+        let mechanisms: Vec<Mechanism> = (relaxation.tau_s.iter().enumerate())
+            .map(|(l, &tau)| {
+                let relaxed = block(&relaxation.relaxed_by(l));
+                Mechanism {
+                    alpha: (2.0 * tau - dt) / (2.0 * tau + dt),
+                    beta: dt / (2.0 * tau + dt),
+                    dt_over_4tau: dt / (4.0 * tau),
+                    relaxed,
+                    dissipative: relaxed.map(|d| d / tau),
+                }
+            })
+            .collect();
+        let zero = [[0.0; W]; 3];
+        RowMemory {
+            eps_prev: vec![zero; points],
+            e: vec![zero; points * mechanisms.len()],
+            mechanisms,
+            dt,
+            loss: [0.0; W],
+            energy: [0.0; W],
+        }
+    }
+
+    /// The energy dissipated since the last call (dt times the loss sums), the sums reset.
+    pub(crate) fn take_loss(&mut self) -> f64 {
+        let loss = self.dt * self.loss.iter().sum::<f64>();
+        self.loss = [0.0; W];
+        loss
+    }
+
+    /// Clears the memory energy before a [`Probe`].
+    pub(crate) fn clear_energy(&mut self) {
+        self.energy = [0.0; W];
+    }
+
+    /// The memory energy the last [`Probe`] summed.
+    pub(crate) fn energy(&self) -> f64 {
+        self.energy.iter().sum()
+    }
+}
+
+impl<const W: usize> PointLaw<W> for Viscous {
+    type State = RowMemory<W>;
+    #[inline(always)]
+    fn at_point(
+        m: &mut RowMemory<W>,
+        q: usize,
+        w: &Lanes<W>,
+        eps: [&Lanes<W>; 3],
+        [sxx, syy, sxy]: [&mut Lanes<W>; 3],
+    ) {
+        let eps = [*eps[0], *eps[1], *eps[2]];
+        let old = m.eps_prev[q];
+        let count = m.mechanisms.len();
+        // sum_l DC_l e_{l,n}, and the loss of each lane
+        let mut relaxed = [[0.0; W]; 3];
+        let mut loss = [0.0; W];
+        for (mech, e) in m
+            .mechanisms
+            .iter()
+            .zip(&mut m.e[q * count..(q + 1) * count])
+        {
+            let (d, g) = (&mech.relaxed, &mech.dissipative);
+            for i in 0..W {
+                let mut abar = [0.0; 3];
+                for c in 0..3 {
+                    let e_new = mech.alpha * e[c][i] + mech.beta * (old[c][i] + eps[c][i]);
+                    abar[c] = 0.5 * ((old[c][i] - e[c][i]) + (eps[c][i] - e_new));
+                    e[c][i] = e_new;
+                }
+                relaxed[0][i] += d[0] * e[0][i] + d[1] * e[1][i];
+                relaxed[1][i] += d[1] * e[0][i] + d[2] * e[1][i];
+                relaxed[2][i] += d[3] * e[2][i];
+                loss[i] += g[0] * abar[0] * abar[0]
+                    + 2.0 * g[1] * abar[0] * abar[1]
+                    + g[2] * abar[1] * abar[1]
+                    + g[3] * abar[2] * abar[2];
+            }
+        }
+        for i in 0..W {
+            sxx[i] -= w[i] * relaxed[0][i];
+            syy[i] -= w[i] * relaxed[1][i];
+            sxy[i] -= w[i] * relaxed[2][i];
+            m.loss[i] += w[i] * loss[i];
+        }
+        m.eps_prev[q] = eps;
+    }
+}
+
+impl<const W: usize> PointLaw<W> for Start {
+    type State = RowMemory<W>;
+    const FORCES: bool = false;
+    fn at_point(
+        m: &mut RowMemory<W>,
+        q: usize,
+        _: &Lanes<W>,
+        eps: [&Lanes<W>; 3],
+        _: [&mut Lanes<W>; 3],
+    ) {
+        m.eps_prev[q] = [*eps[0], *eps[1], *eps[2]];
+    }
+}
+
+impl<const W: usize> PointLaw<W> for Probe {
+    type State = RowMemory<W>;
+    const FORCES: bool = false;
+    fn at_point(
+        m: &mut RowMemory<W>,
+        q: usize,
+        w: &Lanes<W>,
+        eps: [&Lanes<W>; 3],
+        _: [&mut Lanes<W>; 3],
+    ) {
+        let eps = [*eps[0], *eps[1], *eps[2]];
+        let old = &m.eps_prev[q];
+        let count = m.mechanisms.len();
+        let mut energy = [0.0; W];
+        for (mech, e) in m.mechanisms.iter().zip(&m.e[q * count..(q + 1) * count]) {
+            for i in 0..W {
+                let (mut a_old, mut a_new) = ([0.0; 3], [0.0; 3]);
+                for c in 0..3 {
+                    let e_new = mech.alpha * e[c][i] + mech.beta * (old[c][i] + eps[c][i]);
+                    a_old[c] = old[c][i] - e[c][i];
+                    a_new[c] = eps[c][i] - e_new;
+                }
+                let a_sum = [
+                    a_old[0] + a_new[0],
+                    a_old[1] + a_new[1],
+                    a_old[2] + a_new[2],
+                ];
+                let strains = [old[0][i], old[1][i], old[2][i]];
+                let now = [eps[0][i], eps[1][i], eps[2][i]];
+                let d = &mech.relaxed;
+                energy[i] += 0.5 * form(d, &a_new, &a_old) - 0.5 * form(d, &now, &strains)
+                    + mech.dt_over_4tau * form(d, &a_old, &a_sum);
+            }
+        }
+        for i in 0..W {
+            m.energy[i] += w[i] * energy[i];
+        }
+    }
+}
+
+/// x.B y for a block stiffness B.
+fn form(b: &Block, x: &[f64; 3], y: &[f64; 3]) -> f64 {
+    b[0] * x[0] * y[0]
+        + b[1] * (x[0] * y[1] + x[1] * y[0])
+        + b[2] * x[1] * y[1]
+        + b[3] * x[2] * y[2]
+}
