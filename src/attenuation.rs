@@ -175,6 +175,76 @@ pub fn plane_wave(rho: f64, modulus: Complex64, omega: f64) -> (f64, f64) {
     (omega / k.re, -k.im)
 }
 
+/// Plane waves along the axes of a material per frequency: Q, attenuation and phase velocity
+/// of P waves along x (C11) and y (C22) and of S waves (C66), from its complex stiffness
+/// ([`plane_wave`]); an elastic material has no loss and its elastic speeds.
+#[derive(Clone, Debug, Serialize)]
+pub struct Dispersion {
+    /// The material's name.
+    pub material: String,
+    /// Frequencies (Hz).
+    pub frequency_hz: Vec<f64>,
+    /// P waves along x.
+    pub p_x: WaveCurve,
+    /// P waves along y (through the layers).
+    pub p_y: WaveCurve,
+    /// S waves along either axis.
+    pub s: WaveCurve,
+}
+
+/// One wave type's curves over [`Dispersion::frequency_hz`].
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct WaveCurve {
+    /// Q(f) = Re M / Im M (infinite for an elastic material).
+    pub quality: Vec<f64>,
+    /// Attenuation (dB/mm): 20 log10(e) alpha / 1000, alpha = -Im k in Np/m.
+    pub attenuation_db_per_mm: Vec<f64>,
+    /// Phase velocity w / Re k (m/s).
+    pub phase_velocity_m_s: Vec<f64>,
+}
+
+impl Dispersion {
+    /// The curves of `material` at `frequency_hz` (each positive and finite, else an error
+    /// naming `frequency_hz`).
+    pub fn of(material: &Material, frequency_hz: &[f64]) -> Result<Dispersion> {
+        if let Some(f) = frequency_hz.iter().find(|f| !(**f > 0.0 && f.is_finite())) {
+            return Err(Error::invalid(
+                "frequency_hz",
+                f,
+                "must be positive and finite (Hz)",
+            ));
+        }
+        let mut d = Dispersion {
+            material: material.name.clone(),
+            frequency_hz: frequency_hz.to_vec(),
+            p_x: WaveCurve::default(),
+            p_y: WaveCurve::default(),
+            s: WaveCurve::default(),
+        };
+        let db_per_np = 20.0 * std::f64::consts::LOG10_E;
+        for &f in frequency_hz {
+            let omega = 2.0 * PI * f;
+            let c = match &material.relaxation {
+                Some(r) => r.stiffness_at(omega),
+                None => material
+                    .stiffness_pa
+                    .map(|row| row.map(|c| Complex64::new(c, 0.0))),
+            };
+            for (curve, m) in [
+                (&mut d.p_x, c[0][0]),
+                (&mut d.p_y, c[1][1]),
+                (&mut d.s, c[2][2]),
+            ] {
+                let (speed, alpha) = plane_wave(material.density_kg_m3, m, omega);
+                curve.quality.push(m.re / m.im);
+                curve.attenuation_db_per_mm.push(db_per_np * alpha / 1000.0);
+                curve.phase_velocity_m_s.push(speed);
+            }
+        }
+        Ok(d)
+    }
+}
+
 /// Checks a run's step against the shortest relaxation time of its materials: an error
 /// naming `attenuation.band_hz` where dt / tau_min > [`MAX_STEP_PER_TAU`].
 pub fn check_step(tau_min: f64, dt_s: f64) -> Result<()> {

@@ -57,6 +57,47 @@ mod material_api {
         summary(&ctx, &m, plane)
     }
 
+    /// The losses of the report's materials from the literature (the scene field `attenuation` that `--set losses=true` gives the experiments): #{band_hz, mechanisms, reference_hz, quality: #{epoxy: #{q_p, q_s}, fabric_0_90, fabric_45_45}}.
+    #[rhai_fn(return_raw)]
+    pub fn losses(ctx: NativeCallContext) -> Res<Dynamic> {
+        crate::script::convert::to_dynamic(
+            &ctx,
+            &crate::attenuation::AttenuationSpec::report_materials(),
+        )
+    }
+
+    /// Plane waves along the axes of preset `name` (plane strain) with the losses `attenuation` (a scene's `attenuation` map) at `frequency_hz`: #{material, frequency_hz, p_x, p_y, s}, each wave #{quality, attenuation_db_per_mm, phase_velocity_m_s}. A material `attenuation` does not list stays elastic (infinite Q, no loss).
+    #[rhai_fn(return_raw)]
+    pub fn dispersion(
+        ctx: NativeCallContext,
+        name: &str,
+        attenuation: Map,
+        frequency_hz: rhai::Array,
+    ) -> Res<Dynamic> {
+        use crate::attenuation::{attenuate, AttenuationSpec, Dispersion};
+        use crate::material::Plane;
+        let spec: AttenuationSpec = options(
+            &ctx,
+            attenuation,
+            &AttenuationSpec::report_materials(),
+            "attenuation",
+        )?;
+        let mut materials = ["epoxy", "fabric_0_90", "fabric_45_45"]
+            .iter()
+            .map(|n| Orthotropic::preset(n).and_then(|m| m.reduce(Plane::Strain)))
+            .collect::<crate::Result<Vec<_>>>()
+            .at(&ctx)?;
+        if !materials.iter().any(|m| m.name == name) {
+            Orthotropic::preset(name).at(&ctx)?;
+        }
+        attenuate(&mut materials, &spec).at(&ctx)?;
+        let material = materials.iter().find(|m| m.name == name).expect("a preset");
+        let frequencies =
+            crate::script::convert::floats(&ctx, &frequency_hz.into(), "frequency_hz")?;
+        let d = Dispersion::of(material, &frequencies).at(&ctx)?;
+        crate::script::convert::to_dynamic(&ctx, &d)
+    }
+
     /// An isotropic material (E in Pa, Poisson ratio nu, density in kg/m^3) in plane strain.
     #[rhai_fn(return_raw)]
     pub fn isotropic(
