@@ -2,6 +2,7 @@
 //! (report Sec. 4.4-4.7, and the viscous-spring boundary of Liu et al. 2006).
 
 pub mod element;
+pub mod memory;
 pub mod operator;
 pub mod sparse;
 

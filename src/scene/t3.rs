@@ -146,19 +146,13 @@ fn gmsh_crack(bytes: &[u8], group: i32, mesh: &Mesh, tied: bool) -> Result<Crack
 
 /// The T3 scene (see [`Scene::build`]).
 pub(super) fn build_t3(spec: &SceneSpec) -> Result<Scene> {
-    if spec.attenuation.is_some() {
-        return Err(Error::invalid(
-            "attenuation",
-            "given",
-            "losses are implemented on spectral elements so far: use discretisation: \
-             #{kind: \"sem\"} (linear triangles would run the unrelaxed stiffness without \
-             its memory variables)",
-        ));
-    }
-    let (laminate, mut mesh, crack_placement, region) = match &spec.gmsh {
+    let (mut laminate, mut mesh, crack_placement, region) = match &spec.gmsh {
         None => layered_mesh(spec)?,
         Some(g) => gmsh_mesh(spec, g)?,
     };
+    if let Some(attenuation) = &spec.attenuation {
+        crate::attenuation::attenuate(&mut laminate.materials, attenuation)?;
+    }
     let crack = match &crack_placement {
         Some(p) if !p.tied => Some(p.insert(&mut mesh)?),
         _ => None,

@@ -6,6 +6,7 @@
 
 use super::NewmarkBody;
 use crate::error::{Error, Result};
+use crate::fem::memory::T3Memory;
 use crate::fem::{Model, StiffnessOperator};
 use crate::mesh::Crack;
 use rayon::prelude::*;
@@ -147,8 +148,15 @@ impl<'a> Fem<'a> {
     }
 }
 
+/// The scratch of a T3 run: the memory variables of its viscoelastic triangles, once a time
+/// step starts them ([`Discretisation::start_memory`]).
+#[derive(Debug, Default)]
+pub struct FemWorkspace {
+    memory: Option<T3Memory>,
+}
+
 impl Discretisation for Fem<'_> {
-    type Workspace = ();
+    type Workspace = FemWorkspace;
 
     fn lumped_mass(&self) -> &[f64] {
         &self.model.lumped_mass
@@ -162,7 +170,9 @@ impl Discretisation for Fem<'_> {
     fn periodic_ties(&self) -> &[(usize, usize)] {
         &self.model.periodic
     }
-    fn workspace(&self) {}
+    fn workspace(&self) -> FemWorkspace {
+        FemWorkspace::default()
+    }
     fn node_x(&self, node: usize) -> f64 {
         self.model.mesh.nodes[node][0]
     }
@@ -173,18 +183,37 @@ impl Discretisation for Fem<'_> {
     fn newmark_body(&self, consistent_mass: bool) -> Result<NewmarkBody<'_>> {
         NewmarkBody::t3(self.model, consistent_mass)
     }
-    fn stiffness_times(&self, u: &[f64], out: &mut [f64], _: &mut ()) {
+    fn stiffness_times(&self, u: &[f64], out: &mut [f64], _: &mut FemWorkspace) {
         self.op().mul(u, out);
     }
-    /// The fused kernel: K u and the update in one pass ([`StiffnessOperator::explicit_update`]).
+    /// The fused kernel: K u and the update in one pass ([`StiffnessOperator::explicit_update`]),
+    /// then the viscoelastic triangles' memory stress ([`T3Memory::relax`]).
     fn explicit_update(
         &self,
         a: &[f64],
         u_prev: &[f64],
         u: &[f64],
         u_next: &mut [f64],
-        _: &mut (),
+        work: &mut FemWorkspace,
     ) {
         self.op().explicit_update(a, u_prev, u, u_next);
+        if let Some(memory) = &mut work.memory {
+            memory.relax(a, u, u_next);
+        }
+    }
+    fn shortest_relaxation_s(&self) -> Option<f64> {
+        (self.model.materials.iter())
+            .filter_map(|m| m.relaxation.as_ref())
+            .map(crate::material::Relaxation::shortest_tau_s)
+            .reduce(f64::min)
+    }
+    fn start_memory(&self, dt: f64, u_prev: &[f64], work: &mut FemWorkspace) {
+        work.memory = T3Memory::start(self.model, dt, u_prev);
+    }
+    fn take_viscous_loss(&self, work: &mut FemWorkspace) -> f64 {
+        work.memory.as_mut().map_or(0.0, T3Memory::take_loss)
+    }
+    fn memory_energy(&self, u: &[f64], work: &mut FemWorkspace) -> f64 {
+        work.memory.as_mut().map_or(0.0, |m| m.energy(u))
     }
 }

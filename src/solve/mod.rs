@@ -28,7 +28,7 @@ use crate::fem::Model;
 use crate::mesh::Crack;
 use crate::signal::Signal;
 pub use contact_law::{ContactLaw, NoContact};
-pub use discretisation::{Discretisation, Fem};
+pub use discretisation::{Discretisation, Fem, FemWorkspace};
 pub use explicit::{CentralDifference, Coefficients};
 pub use ledger::{EnergyLedger, Flows};
 pub use newmark::{Newmark, NewmarkBody};
