@@ -174,20 +174,27 @@ impl<const W: usize> PointLaw<W> for Viscous {
             .zip(&mut m.e[q * count..(q + 1) * count])
         {
             let (d, g) = (&mech.relaxed, &mech.dissipative);
-            for i in 0..W {
-                let mut abar = [0.0; 3];
-                for c in 0..3 {
+            // one simple loop per quantity, each a few vector operations across the lanes
+            let mut abar = [[0.0; W]; 3];
+            for c in 0..3 {
+                for i in 0..W {
                     let e_new = mech.alpha * e[c][i] + mech.beta * (old[c][i] + eps[c][i]);
-                    abar[c] = 0.5 * ((old[c][i] - e[c][i]) + (eps[c][i] - e_new));
+                    abar[c][i] = 0.5 * ((old[c][i] - e[c][i]) + (eps[c][i] - e_new));
                     e[c][i] = e_new;
                 }
+            }
+            for i in 0..W {
                 relaxed[0][i] += d[0] * e[0][i] + d[1] * e[1][i];
+            }
+            for i in 0..W {
                 relaxed[1][i] += d[1] * e[0][i] + d[2] * e[1][i];
+            }
+            for i in 0..W {
                 relaxed[2][i] += d[3] * e[2][i];
-                loss[i] += g[0] * abar[0] * abar[0]
-                    + 2.0 * g[1] * abar[0] * abar[1]
-                    + g[2] * abar[1] * abar[1]
-                    + g[3] * abar[2] * abar[2];
+            }
+            for i in 0..W {
+                let [a0, a1, a2] = [abar[0][i], abar[1][i], abar[2][i]];
+                loss[i] += g[0] * a0 * a0 + 2.0 * g[1] * a0 * a1 + g[2] * a1 * a1 + g[3] * a2 * a2;
             }
         }
         for i in 0..W {
