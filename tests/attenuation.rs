@@ -579,3 +579,50 @@ fn triangles_carry_the_losses_as_accurately_as_they_carry_elastic_waves() {
         lossy.report
     );
 }
+
+/// Newmark and the fourth-order step have no memory variables: with losses they are refused,
+/// naming `integrator`, on both discretisations; so is a step above 0.35 tau_min, naming
+/// `attenuation.band_hz`.
+#[test]
+fn integrators_without_memory_refuse_losses() {
+    use trnews::solve::Integrator;
+    let t3 = SceneSpec {
+        element_size_x_m: 50e-6,
+        element_size_y_m: 50e-6,
+        discretisation: DiscretisationSpec::T3,
+        ..strip(1, Some(attenuation()))
+    };
+    for spec in [strip(3, Some(attenuation())), t3] {
+        let scene = Scene::build(&spec).unwrap();
+        let drive = Signal {
+            dt_s: 1e-9,
+            t0_s: 0.0,
+            samples: vec![1.0; 100],
+        };
+        for integrator in [
+            Integrator::Newmark {
+                consistent_mass: false,
+            },
+            Integrator::FourthOrder,
+        ] {
+            let config = RunConfig {
+                integrator,
+                progress: false,
+                ..scene.run_config(1e-7)
+            };
+            let err = scene.transmit(&drive, &config).unwrap_err().to_string();
+            assert!(
+                err.contains("integrator") && err.contains("losses"),
+                "{err}"
+            );
+        }
+        let config = RunConfig {
+            dt_s: Some(30e-9),
+            force: true,
+            progress: false,
+            ..scene.run_config(1e-6)
+        };
+        let err = scene.transmit(&drive, &config).unwrap_err().to_string();
+        assert!(err.contains("attenuation.band_hz"), "{err}");
+    }
+}
