@@ -16,10 +16,14 @@ fn spec(quality: &[(&str, f64, f64)]) -> AttenuationSpec {
 }
 
 fn materials() -> Vec<Material> {
-    [Orthotropic::epoxy(), Orthotropic::fabric_0_90()]
-        .iter()
-        .map(|o| o.reduce(Plane::Strain).unwrap())
-        .collect()
+    [
+        Orthotropic::epoxy(),
+        Orthotropic::fabric_0_90(),
+        Orthotropic::fabric_45_45(),
+    ]
+    .iter()
+    .map(|o| o.reduce(Plane::Strain).unwrap())
+    .collect()
 }
 
 /// Three mechanisms over a decade hold Q within 0.5% for Q from 5 to 200 (the scratch fit
@@ -171,4 +175,32 @@ fn the_step_must_follow_the_fastest_mechanism() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("attenuation.band_hz"), "{err}");
+}
+
+/// The curves the figures draw: an elastic material has no loss and its axis speeds; the
+/// fitted epoxy has Q_S = 19 at the band's centre within the fit, and its P attenuation in
+/// dB/mm is 20 log10(e) w / (2 Q c) / 1000 to first order in 1/Q; a frequency that is not
+/// positive is an error naming `frequency_hz`.
+#[test]
+fn dispersion_curves_of_elastic_and_viscoelastic_materials() {
+    let elastic = &materials()[1];
+    let d = Dispersion::of(elastic, &[1e6]).unwrap();
+    assert_eq!(d.p_y.attenuation_db_per_mm[0], 0.0);
+    assert!(d.p_y.quality[0].is_infinite());
+    let speeds = elastic.wave_speeds();
+    assert!((d.p_y.phase_velocity_m_s[0] / speeds.p_y_m_s - 1.0).abs() < 1e-12);
+    let mut m = materials();
+    attenuate(&mut m, &AttenuationSpec::report_materials()).unwrap();
+    let f = (BAND[0] * BAND[1]).sqrt();
+    let d = Dispersion::of(&m[0], &[f]).unwrap();
+    assert!(
+        (d.s.quality[0] / 19.0 - 1.0).abs() < 0.005,
+        "{}",
+        d.s.quality[0]
+    );
+    let (q, c) = (d.p_y.quality[0], d.p_y.phase_velocity_m_s[0]);
+    let first_order = 20.0 * std::f64::consts::LOG10_E * 2.0 * PI * f / (2.0 * q * c) / 1000.0;
+    assert!((d.p_y.attenuation_db_per_mm[0] / first_order - 1.0).abs() < 1e-3);
+    let err = Dispersion::of(&m[0], &[0.0]).unwrap_err().to_string();
+    assert!(err.contains("frequency_hz"), "{err}");
 }
