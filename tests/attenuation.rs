@@ -3,8 +3,9 @@
 //! standard linear solids' complex moduli, the energy ledger with the memory variables and
 //! their dissipation, and thread invariance.
 
+mod common;
+
 use rustfft::num_complex::Complex64;
-use rustfft::FftPlanner;
 use std::f64::consts::PI;
 use trnews::attenuation::{AttenuationSpec, QualitySpec};
 use trnews::material::Material;
@@ -129,71 +130,20 @@ fn transmit(spec: &SceneSpec, dt: f64, duration: f64) -> (Scene, RunOutput) {
     (scene, out)
 }
 
-/// The exact u_y(y, t_n) of the continuum stack with the scene's materials (C22(w) complex
-/// where they relax) and its bottom dashpot (real, rho c of the unrelaxed C22): per
-/// frequency the state (U, S = C22(w) dU/dy) starts at the bottom as (1, i w z), is carried up
-/// through each layer by U' = cos(kd) U + sin(kd) / (C k) S, S' = -C k sin(kd) U + cos(kd) S,
-/// k = w sqrt(rho / C22(w)), and is scaled so that S at the top is the drive's spectrum. The
-/// drive is periodised over 16x the run, for the stack to ring down.
+/// The exact u_y(y, t_n) at [`HEIGHTS`] of the continuum stack with the scene's materials
+/// (C22(w) complex where they relax) and its bottom dashpot ([`common::plane_wave_in_stack`]).
 fn exact(materials: &[Material], dt: f64, steps: usize) -> Vec<Vec<f64>> {
-    let layers: Vec<(&Material, f64)> = LAYERS
+    let layers: Vec<(Material, f64)> = LAYERS
         .iter()
         .rev()
-        .map(|&(name, t)| (materials.iter().find(|m| m.name == name).unwrap(), t))
-        .collect();
-    let height: f64 = LAYERS.iter().map(|l| l.1).sum();
-    let c22 = |m: &Material, omega: f64| match &m.relaxation {
-        Some(r) => r.stiffness_at(omega)[1][1],
-        None => Complex64::new(m.stiffness_pa[1][1], 0.0),
-    };
-    let bottom = layers[0].0;
-    let z = (bottom.stiffness_pa[1][1] * bottom.density_kg_m3).sqrt();
-    let n = (16 * steps).next_power_of_two();
-    let mut planner = FftPlanner::new();
-    let mut g: Vec<Complex64> = (0..n)
-        .map(|k| Complex64::new(ricker(k as f64 * dt), 0.0))
-        .collect();
-    planner.plan_fft_forward(n).process(&mut g);
-    let mut responses = vec![vec![Complex64::new(0.0, 0.0); n]; HEIGHTS.len()];
-    for k in 1..n {
-        let signed = if k <= n / 2 {
-            k as f64
-        } else {
-            k as f64 - n as f64
-        };
-        let omega = 2.0 * PI * signed / (n as f64 * dt);
-        let at_y = |y: f64| {
-            let mut state = (Complex64::new(1.0, 0.0), Complex64::new(0.0, omega * z));
-            let mut base = 0.0;
-            for &(m, d) in &layers {
-                let c = c22(m, omega);
-                let wave = omega * (m.density_kg_m3 / c).sqrt();
-                let phase = wave * (y - base).clamp(0.0, d);
-                let (s, co) = (phase.sin(), phase.cos());
-                state = (
-                    co * state.0 + s / (c * wave) * state.1,
-                    -c * wave * s * state.0 + co * state.1,
-                );
-                if y <= base + d {
-                    break;
-                }
-                base += d;
-            }
-            state
-        };
-        let top = at_y(height).1;
-        for (r, &y) in responses.iter_mut().zip(&HEIGHTS) {
-            r[k] = g[k] * at_y(y).0 / top;
-        }
-    }
-    let inverse = planner.plan_fft_inverse(n);
-    responses
-        .into_iter()
-        .map(|mut r| {
-            inverse.process(&mut r);
-            r[..steps].iter().map(|v| v.re / n as f64).collect()
+        .map(|&(name, t)| {
+            (
+                materials.iter().find(|m| m.name == name).unwrap().clone(),
+                t,
+            )
         })
-        .collect()
+        .collect();
+    common::plane_wave_in_stack(&layers, ricker, dt, steps, &HEIGHTS)
 }
 
 fn relative_error(a: &[f64], reference: &[f64]) -> f64 {

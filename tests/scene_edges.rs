@@ -3,8 +3,8 @@
 //! an absorbing (dashpot) bottom makes a plane P wave, whose exact 1-D solution is written
 //! here as a transfer-matrix (Thomson-Haskell) solution in the frequency domain.
 
-use rustfft::num_complex::Complex64;
-use rustfft::FftPlanner;
+mod common;
+
 use trnews::material::{Material, Plane};
 use trnews::mesh::Side;
 use trnews::scene::{
@@ -151,12 +151,8 @@ fn transmit_pulse(
     (dt, scene.transmit(&drive, &config).unwrap())
 }
 
-/// The exact u_y(y, t_n), t_n = n dt, of the continuum stack: per frequency, the state
-/// (U, S = C22 dU/dy) starts at the bottom as (1, i omega Z) (the dashpot, i.e. a radiating
-/// half-space of the bottom material), is carried up through each layer by
-///   U' = cos(kd) U + sin(kd) / (C k) S,  S' = -C k sin(kd) U + cos(kd) S,  k = omega / c,
-/// and is scaled so that S(H) equals the applied traction. The drive is periodised over a
-/// window 16x the run, long enough for the radiating stack to have rung down.
+/// The exact u_y(y, t_n), t_n = n dt, of the continuum stack under the drive `PULSE`
+/// ([`common::plane_wave_in_stack`]).
 fn exact(dt: f64, steps: usize, ys: &[f64]) -> Vec<Vec<f64>> {
     exact_stack(&LAYERS, PULSE, dt, steps, ys)
 }
@@ -169,69 +165,12 @@ fn exact_stack(
     steps: usize,
     ys: &[f64],
 ) -> Vec<Vec<f64>> {
-    let height: f64 = layers_top_down.iter().map(|l| l.1).sum();
-    let layers: Vec<(f64, f64, f64)> = layers_top_down
+    let layers: Vec<(Material, f64)> = layers_top_down
         .iter()
         .rev()
-        .map(|&(m, t)| {
-            let mat = material(m);
-            (mat.stiffness_pa[1][1], mat.density_kg_m3, t)
-        })
+        .map(|&(m, t)| (material(m), t))
         .collect();
-    let n = (16 * steps).next_power_of_two();
-    let mut planner = FftPlanner::new();
-    let mut g: Vec<Complex64> = (0..n)
-        .map(|k| Complex64::new(ricker(k as f64 * dt, pulse), 0.0))
-        .collect();
-    planner.plan_fft_forward(n).process(&mut g);
-    let inverse = planner.plan_fft_inverse(n);
-    let (c_bottom, rho_bottom, _) = layers[0];
-    let z_bottom = (c_bottom * rho_bottom).sqrt();
-    let carry = |state: (Complex64, Complex64), omega: f64, c: f64, rho: f64, d: f64| {
-        let k = omega * (rho / c).sqrt();
-        let (s, co) = (k * d).sin_cos();
-        (
-            co * state.0 + s / (c * k) * state.1,
-            -c * k * s * state.0 + co * state.1,
-        )
-    };
-    // U at each y (per unit bottom displacement) and S at the top, per frequency
-    let mut responses: Vec<Vec<Complex64>> = vec![vec![Complex64::new(0.0, 0.0); n]; ys.len()];
-    for k in 1..n {
-        let signed = if k <= n / 2 {
-            k as f64
-        } else {
-            k as f64 - n as f64
-        };
-        let omega = 2.0 * std::f64::consts::PI * signed / (n as f64 * dt);
-        let at_y = |y: f64| {
-            let mut state = (
-                Complex64::new(1.0, 0.0),
-                Complex64::new(0.0, omega * z_bottom),
-            );
-            let mut bottom = 0.0;
-            for &(c, rho, d) in &layers {
-                let part = (y - bottom).clamp(0.0, d);
-                state = carry(state, omega, c, rho, part);
-                if y <= bottom + d {
-                    break;
-                }
-                bottom += d;
-            }
-            state
-        };
-        let top = at_y(height).1;
-        for (r, &y) in responses.iter_mut().zip(ys) {
-            r[k] = g[k] * at_y(y).0 / top;
-        }
-    }
-    responses
-        .into_iter()
-        .map(|mut r| {
-            inverse.process(&mut r);
-            r[..steps].iter().map(|v| v.re / n as f64).collect()
-        })
-        .collect()
+    common::plane_wave_in_stack(&layers, |t| ricker(t, pulse), dt, steps, ys)
 }
 
 /// Relative L2 distance of `a` from `reference`.

@@ -24,18 +24,19 @@
 
 use crate::material::Relaxation;
 
-/// W values, one per element of a lane group (spectral elements) or one value (W = 1).
+/// W values side by side: one per element of a lane group (spectral elements) or per triangle.
 pub(crate) type Lanes<const W: usize> = [f64; W];
 
-/// What the row kernel does at a GLL point beyond the elastic weighted stress W C_U eps.
+/// What a stress kernel does at a quadrature point beyond the elastic weighted stress
+/// W C_U eps.
 pub(crate) trait PointLaw<const W: usize> {
-    /// What the law reads and writes per element row.
+    /// What the law reads and writes per set of points (an element row, a chunk of triangles).
     type State;
     /// Whether the kernel goes on to the nodal forces (laws that only read fields do not).
     const FORCES: bool = true;
-    /// At point `q` of the row (point p of lane group g: q = g P + p, P points per element),
-    /// of weight W (w_a w_b jx jy) and strain `eps` (xx, yy, engineering xy): adjusts the
-    /// weighted stress `s`, W C_U eps on entry.
+    /// At point `q` of the set (for spectral elements point p of lane group g: q = g P + p,
+    /// P points per element), of quadrature weight W and strain `eps` (xx, yy, engineering
+    /// xy): adjusts the weighted stress `s`, W C_U eps on entry.
     fn at_point(
         state: &mut Self::State,
         q: usize,

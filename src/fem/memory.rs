@@ -12,6 +12,8 @@ use rayon::prelude::*;
 const LANES: usize = 8;
 /// Lane groups per parallel task.
 const GROUPS_PER_CHUNK: usize = 256;
+/// Nodes per parallel task of the force gather.
+const NODES_PER_TASK: usize = 4096;
 
 /// One lane of a group: a triangle's nodes and the gradients of its shape functions,
 /// (b_k, c_k) = (y_j - y_l, x_l - x_j) / 2A (eps = B u_e, [`super::element::strain_displacement`]),
@@ -113,11 +115,11 @@ impl T3Memory {
         self.pass::<Viscous>(u);
         let (start, entries, chunks) = (&self.start, &self.entries, &self.chunks);
         u_next
-            .par_chunks_mut(2 * 4096)
+            .par_chunks_mut(2 * NODES_PER_TASK)
             .enumerate()
             .for_each(|(block, next)| {
                 for (k, pair) in next.chunks_exact_mut(2).enumerate() {
-                    let n = block * 4096 + k;
+                    let n = block * NODES_PER_TASK + k;
                     let mut f = [0.0; 2];
                     for &(c, g, i, v) in &entries[start[n]..start[n + 1]] {
                         let forces = &chunks[c as usize].forces[g as usize][i as usize];
