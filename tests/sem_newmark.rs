@@ -132,7 +132,7 @@ fn newmark_on_spectral_elements_follows_the_roller_mode_with_its_period_error() 
         let dt = period / per_period as f64;
         let steps = 9 * per_period / 4;
         let sources = SampledSources::new(&[], dt, steps + 1).unwrap();
-        let body = NewmarkBody::sem(&m, &k).unwrap();
+        let body = NewmarkBody::sem(&m, &k, dt).unwrap();
         let mut stepper = Newmark::new(body, dt, sources, Some(&shape), None).unwrap();
         drive(&mut stepper, steps, &mut [], &mut |_| {}).unwrap();
         let t = steps as f64 * dt;
@@ -214,7 +214,7 @@ fn a_stiffness_of_another_model_is_refused() {
     let (small, _) = roller_box(2, 2, 1);
     let (large, _) = roller_box(3, 2, 1);
     let k = small.assemble_stiffness();
-    let e = NewmarkBody::sem(&large, &k).err().expect("refused");
+    let e = NewmarkBody::sem(&large, &k, 1e-9).err().expect("refused");
     assert!(e.to_string().contains("stiffness"), "{e}");
 }
 
@@ -229,6 +229,7 @@ fn a_body_put_together_by_hand_is_checked() {
         mass: trnews::solve::newmark::Mass::Lumped(mass),
         dashpots,
         fixed_dofs,
+        memory: None,
     };
     let n = m.dofs();
     let short = &m.lumped_mass[..n - 2];

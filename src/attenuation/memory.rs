@@ -3,7 +3,8 @@
 //! point laws a stress kernel is compiled with: [`Elastic`] (nothing beyond W C_U eps:
 //! elastic rows run today's code), [`Viscous`] (the memory update and its stress, in the time
 //! step), [`Start`] (the memory at the first step) and [`Probe`] (the ledger's memory energy,
-//! read without changing the state).
+//! read without changing the state); for Newmark, [`History`], [`Relax`] and [`Stored`]
+//! (below).
 //!
 //! The update is the trapezoidal rule on tau_l e_l' + e_l = eps (bilinear, A-stable):
 //!
@@ -22,7 +23,23 @@
 //! abar = (a_{n-1} + a_n) / 2 >= 0, so E_{n+1/2} - E_{n-1/2} + dt d_{n-1/2} is the work of the
 //! external forces over the step, to round-off.
 
-use crate::material::Relaxation;
+//! Newmark (average acceleration, the trapezoidal rule on u and v) takes the same update.
+//! Put into the stress at t_{n+1},
+//!
+//!   sigma_{n+1} = (C_U - sum_l beta_l DC_l) eps_{n+1} - h_n,
+//!   h_n = sum_l DC_l (alpha_l e_{l,n} + beta_l eps_n),
+//!
+//! so its effective matrix is assembled with C_N = C_U - sum_l beta_l DC_l
+//! ([`newmark_stiffness_change`]) and its right-hand side gains the history force G^T h_n
+//! ([`History`]); once u_{n+1} is solved for, [`Relax`] updates the memory. The whole system
+//! (u, v, e_l) then advances by the trapezoidal rule, which keeps the quadratic energy
+//!
+//!   E_n = 1/2 v.M v + 1/2 u.K_U u + sum_q W_q sum_l (1/2 e_l.DC_l e_l - e_l.DC_l eps),
+//!
+//! (the stored energy 1/2 eps.C_R eps + sum_l 1/2 a_l.DC_l a_l written with C_U; [`Stored`]
+//! gives the memory's part) and dissipates dt d_{n+1/2} with the same d as above.
+
+use crate::material::{Material, Relaxation};
 
 /// W values side by side: one per element of a lane group (spectral elements) or per triangle.
 pub(crate) type Lanes<const W: usize> = [f64; W];
@@ -65,6 +82,43 @@ pub(crate) struct Start;
 /// MEM_{n-1/2} (module docs) from u_n and the state after step n - 1, into
 /// [`RowMemory::energy`]; the state is left as it was.
 pub(crate) struct Probe;
+
+/// Newmark's history force: the weighted stress s = W h_n (module docs) of the memory and the
+/// strain of u_n; the memory is left as it was.
+pub(crate) struct History;
+
+/// Newmark's memory update once u_{n+1} is known: [`Viscous`]'s update and loss, without
+/// forces.
+pub(crate) struct Relax;
+
+/// Newmark's memory energy at t_n, sum_l W (1/2 e_l.DC_l e_l - e_l.DC_l eps_n) from the strain
+/// of u_n, into [`RowMemory::energy`]; the state is left as it was.
+pub(crate) struct Stored;
+
+/// The trapezoidal update's (alpha_l, beta_l) for relaxation time `tau` at step `dt`.
+fn trapezoid(tau: f64, dt: f64) -> (f64, f64) {
+    ((2.0 * tau - dt) / (2.0 * tau + dt), dt / (2.0 * tau + dt))
+}
+
+/// C_N - C_U = -sum_l beta_l DC_l: what the trapezoidal memory update takes off the stiffness
+/// acting on eps_{n+1} in Newmark's effective matrix (module docs); zero for an elastic
+/// material.
+pub(crate) fn newmark_stiffness_change(material: &Material, dt: f64) -> [[f64; 3]; 3] {
+    let mut c = [[0.0; 3]; 3];
+    let Some(relaxation) = &material.relaxation else {
+        return c;
+    };
+    for (l, &tau) in relaxation.tau_s.iter().enumerate() {
+        let beta = trapezoid(tau, dt).1;
+        let dc = relaxation.relaxed_by(l);
+        for (row, dc_row) in c.iter_mut().zip(&dc) {
+            for (cij, dij) in row.iter_mut().zip(dc_row) {
+                *cij -= beta * dij;
+            }
+        }
+    }
+    c
+}
 
 /// One relaxation mechanism's constants at the run's step.
 #[derive(Clone, Debug)]
@@ -115,9 +169,10 @@ impl<const W: usize> RowMemory<W> {
         let mechanisms: Vec<Mechanism> = (relaxation.tau_s.iter().enumerate())
             .map(|(l, &tau)| {
                 let relaxed = block(&relaxation.relaxed_by(l));
+                let (alpha, beta) = trapezoid(tau, dt);
                 Mechanism {
-                    alpha: (2.0 * tau - dt) / (2.0 * tau + dt),
-                    beta: dt / (2.0 * tau + dt),
+                    alpha,
+                    beta,
                     dt_over_4tau: dt / (4.0 * tau),
                     relaxed,
                     dissipative: relaxed.map(|d| d / tau),
@@ -258,6 +313,71 @@ impl<const W: usize> PointLaw<W> for Probe {
         }
         for i in 0..W {
             m.energy[i] += w[i] * energy[i];
+        }
+    }
+}
+
+impl<const W: usize> PointLaw<W> for History {
+    type State = RowMemory<W>;
+    fn at_point(
+        m: &mut RowMemory<W>,
+        q: usize,
+        w: &Lanes<W>,
+        eps: [&Lanes<W>; 3],
+        [sxx, syy, sxy]: [&mut Lanes<W>; 3],
+    ) {
+        let count = m.mechanisms.len();
+        let mut h = [[0.0; W]; 3];
+        for (mech, e) in m.mechanisms.iter().zip(&m.e[q * count..(q + 1) * count]) {
+            let d = &mech.relaxed;
+            for i in 0..W {
+                let x: [f64; 3] =
+                    std::array::from_fn(|c| mech.alpha * e[c][i] + mech.beta * eps[c][i]);
+                h[0][i] += d[0] * x[0] + d[1] * x[1];
+                h[1][i] += d[1] * x[0] + d[2] * x[1];
+                h[2][i] += d[3] * x[2];
+            }
+        }
+        for i in 0..W {
+            sxx[i] = w[i] * h[0][i];
+            syy[i] = w[i] * h[1][i];
+            sxy[i] = w[i] * h[2][i];
+        }
+    }
+}
+
+impl<const W: usize> PointLaw<W> for Relax {
+    type State = RowMemory<W>;
+    const FORCES: bool = false;
+    fn at_point(
+        m: &mut RowMemory<W>,
+        q: usize,
+        w: &Lanes<W>,
+        eps: [&Lanes<W>; 3],
+        s: [&mut Lanes<W>; 3],
+    ) {
+        <Viscous as PointLaw<W>>::at_point(m, q, w, eps, s);
+    }
+}
+
+impl<const W: usize> PointLaw<W> for Stored {
+    type State = RowMemory<W>;
+    const FORCES: bool = false;
+    fn at_point(
+        m: &mut RowMemory<W>,
+        q: usize,
+        w: &Lanes<W>,
+        eps: [&Lanes<W>; 3],
+        _: [&mut Lanes<W>; 3],
+    ) {
+        let count = m.mechanisms.len();
+        for (mech, e) in m.mechanisms.iter().zip(&m.e[q * count..(q + 1) * count]) {
+            for i in 0..W {
+                let e_l = [e[0][i], e[1][i], e[2][i]];
+                let strain = [eps[0][i], eps[1][i], eps[2][i]];
+                let d = &mech.relaxed;
+                m.energy[i] += w[i] * (0.5 * form(d, &e_l, &e_l) - form(d, &e_l, &strain));
+            }
         }
     }
 }

@@ -5,7 +5,9 @@
 //! in a fixed order, so results do not depend on the thread count.
 
 use super::Model;
-use crate::attenuation::memory::{PointLaw, Probe, RowMemory, Start, Viscous};
+use crate::attenuation::memory::{
+    History, PointLaw, Probe, Relax, RowMemory, Start, Stored, Viscous,
+};
 use rayon::prelude::*;
 
 /// Triangles side by side in one pass of the memory laws.
@@ -46,9 +48,9 @@ pub struct T3Memory {
 }
 
 impl T3Memory {
-    /// Zero memory for the viscoelastic triangles of `model` at step `dt`, eps_{-1} from
-    /// `u_prev`; `None` where every material is elastic.
-    pub fn start(model: &Model, dt: f64, u_prev: &[f64]) -> Option<T3Memory> {
+    /// Zero memory for the viscoelastic triangles of `model` at step `dt`, to be started
+    /// ([`T3Memory::start`]); `None` where every material is elastic.
+    pub fn new(model: &Model, dt: f64) -> Option<T3Memory> {
         let mut chunks = Vec::new();
         for (m, material) in model.materials.iter().enumerate() {
             let Some(relaxation) = &material.relaxation else {
@@ -84,8 +86,13 @@ impl T3Memory {
             chunks,
         };
         memory.index_nodes(model.mesh.nodes.len());
-        memory.pass::<Start>(u_prev);
         Some(memory)
+    }
+
+    /// The previous strain from `u_prev` (eps_{-1} for central differences, eps_0 for
+    /// Newmark); the memory stays as it is (zero when new).
+    pub fn start(&mut self, u_prev: &[f64]) {
+        self.pass::<Start>(u_prev);
     }
 
     /// The node -> (chunk, group, lane, vertex) lists, in chunk order.
@@ -113,12 +120,17 @@ impl T3Memory {
     /// s = -A sum_l DC_l e_{l,n} (after the elastic update u_next = 2u - u_prev - a .* K_U u).
     pub fn relax(&mut self, a: &[f64], u: &[f64], u_next: &mut [f64]) {
         self.pass::<Viscous>(u);
+        self.gather(u_next, |d, x, f| *x -= a[d] * f);
+    }
+
+    /// Each node's forces from its triangles' slots, in a fixed order, into `out` through
+    /// `combine(dof, value, force)`.
+    fn gather(&self, out: &mut [f64], combine: impl Fn(usize, &mut f64, f64) + Sync) {
         let (start, entries, chunks) = (&self.start, &self.entries, &self.chunks);
-        u_next
-            .par_chunks_mut(2 * NODES_PER_TASK)
+        out.par_chunks_mut(2 * NODES_PER_TASK)
             .enumerate()
-            .for_each(|(block, next)| {
-                for (k, pair) in next.chunks_exact_mut(2).enumerate() {
+            .for_each(|(block, values)| {
+                for (k, pair) in values.chunks_exact_mut(2).enumerate() {
                     let n = block * NODES_PER_TASK + k;
                     let mut f = [0.0; 2];
                     for &(c, g, i, v) in &entries[start[n]..start[n + 1]] {
@@ -126,10 +138,31 @@ impl T3Memory {
                         f[0] += forces[2 * v as usize];
                         f[1] += forces[2 * v as usize + 1];
                     }
-                    pair[0] -= a[2 * n] * f[0];
-                    pair[1] -= a[2 * n + 1] * f[1];
+                    combine(2 * n, &mut pair[0], f[0]);
+                    combine(2 * n + 1, &mut pair[1], f[1]);
                 }
             });
+    }
+
+    /// Newmark's history force G^T h_n from the memory and the strain of u_n = `u`, added to
+    /// `rhs` ([`crate::attenuation::memory`]); the memory is left as it was.
+    pub fn add_history_forces(&mut self, u: &[f64], rhs: &mut [f64]) {
+        self.pass::<History>(u);
+        self.gather(rhs, |_, x, f| *x += f);
+    }
+
+    /// Newmark's memory update to u_{n+1} = `u_next`, its loss added up.
+    pub fn update(&mut self, u_next: &[f64]) {
+        self.pass::<Relax>(u_next);
+    }
+
+    /// Newmark's memory energy at t_n from u_n = `u`, the memory unchanged.
+    pub fn stored_energy(&mut self, u: &[f64]) -> f64 {
+        for c in &mut self.chunks {
+            c.memory.clear_energy();
+        }
+        self.pass::<Stored>(u);
+        self.chunks.iter().map(|c| c.memory.energy()).sum()
     }
 
     /// The energy dissipated since the last call, in chunk order.

@@ -56,7 +56,7 @@ mod experiment_api {
 
     type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
 
-    /// The experiment's setup from `--set`: resolution = quick (default) | paper | smoke; discretisation = sem (default) | t3; error_estimate = auto (default: on where the companions cost at most 30% extra) | true | false; tolerance = a relative error of the first-pass responses (triangles' element sizes refined to meet it; turns the estimate on to check it); losses = false (default, as in the report) | true (the literature's quality factors of the plies and the epoxy; explicit integrator only). A bad value is an error naming the parameter and the value.
+    /// The experiment's setup from `--set`: resolution = quick (default) | paper | smoke; discretisation = sem (default) | t3; error_estimate = auto (default: on where the companions cost at most 30% extra) | true | false; tolerance = a relative error of the first-pass responses (triangles' element sizes refined to meet it; turns the estimate on to check it); losses = false (default, as in the report) | true (the literature's quality factors of the plies and the epoxy; central differences or Newmark, not the fourth-order step). A bad value is an error naming the parameter and the value.
     #[rhai_fn(return_raw)]
     pub fn setup(ctx: NativeCallContext) -> Res<Experiment> {
         read_setup(&ctx, Map::new())

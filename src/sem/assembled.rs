@@ -5,6 +5,7 @@
 
 use super::SemModel;
 use crate::fem::BlockCsr;
+use crate::material::Material;
 
 /// One element's dense stiffness in 2x2 node blocks, `blocks[i * n + j]` coupling local nodes
 /// i and j (local node `b * (order_x + 1) + a`), with its global nodes.
@@ -20,6 +21,28 @@ impl SemModel {
     /// viscous-spring edges' springs are on its diagonal; fixed DOFs and dashpots are not in
     /// it.
     pub fn assemble_stiffness(&self) -> BlockCsr {
+        let mut k = self.assemble_elements(|m| m.stiffness_pa);
+        for &(d, spring) in &self.springs {
+            let along = if d % 2 == 0 {
+                [spring, 0.0]
+            } else {
+                [0.0, spring]
+            };
+            k.add_diagonal(d / 2, along);
+        }
+        k
+    }
+
+    /// What the memory variables change in Newmark's effective matrix at step `dt`: the
+    /// elements assembled with C_N - C_U
+    /// ([`newmark_stiffness_change`](crate::attenuation::memory::newmark_stiffness_change)),
+    /// zero in elastic rows.
+    pub(crate) fn newmark_stiffness_change(&self, dt: f64) -> BlockCsr {
+        self.assemble_elements(|m| crate::attenuation::memory::newmark_stiffness_change(m, dt))
+    }
+
+    /// sum_e int B^T C B dA with each row's material's C = `stiffness(material)`.
+    fn assemble_elements(&self, stiffness: impl Fn(&Material) -> [[f64; 3]; 3]) -> BlockCsr {
         let elements: Vec<(usize, usize)> = (0..self.gll_y.len())
             .flat_map(|r| (0..self.columns_m.len() - 1).map(move |c| (r, c)))
             .collect();
@@ -44,8 +67,9 @@ impl SemModel {
             blocks: vec![[0.0; 4]; cols.len()],
             cols,
         };
+        let materials: Vec<[[f64; 3]; 3]> = self.materials.iter().map(stiffness).collect();
         for &(r, c) in &elements {
-            let e = self.element_matrix(r, c);
+            let e = self.element_matrix(r, c, &materials[self.row_material[r]]);
             let n = e.nodes.len();
             for (i, &row) in e.nodes.iter().enumerate() {
                 let (start, end) = (k.row_ptr[row], k.row_ptr[row + 1]);
@@ -59,14 +83,6 @@ impl SemModel {
                     }
                 }
             }
-        }
-        for &(d, spring) in &self.springs {
-            let along = if d % 2 == 0 {
-                [spring, 0.0]
-            } else {
-                [0.0, spring]
-            };
-            k.add_diagonal(d / 2, along);
         }
         k
     }
@@ -95,7 +111,7 @@ impl SemModel {
 
     /// max_i sum_j |K_e,ij| / m_e,i of element (r, c).
     fn element_gershgorin(&self, r: usize, c: usize) -> f64 {
-        let e = self.element_matrix(r, c);
+        let e = self.element_matrix(r, c, &self.materials[self.row_material[r]].stiffness_pa);
         let (gx, gy) = (&self.gll_x, &self.gll_y[r]);
         let na = gx.order() + 1;
         let n = e.nodes.len();
@@ -125,14 +141,13 @@ impl SemModel {
     /// K_e of element (r, c): at each GLL point (k, l) with weight w_k w_l jx jy, the nodes
     /// whose shape function has a non-zero gradient there (node (a, l): d/dx = D_x[k][a] / jx;
     /// node (k, b): d/dy = D_y[l][b] / jy), B_i = [[dx, 0], [0, dy], [dy, dx]] (strains
-    /// xx, yy, xy against u_x, u_y), and the blocks w B_i^T C B_j.
-    fn element_matrix(&self, r: usize, c: usize) -> ElementMatrix {
+    /// xx, yy, xy against u_x, u_y), and the blocks w B_i^T C B_j with C = `cm`.
+    fn element_matrix(&self, r: usize, c: usize, cm: &[[f64; 3]; 3]) -> ElementMatrix {
         let (gx, gy) = (&self.gll_x, &self.gll_y[r]);
         let (na, nb) = (gx.order() + 1, gy.order() + 1);
         let n = na * nb;
         let jx = 0.5 * (self.columns_m[c + 1] - self.columns_m[c]);
         let jy = 0.5 * (self.rows_m[r + 1] - self.rows_m[r]);
-        let cm = &self.materials[self.row_material[r]].stiffness_pa;
         let mut blocks = vec![[0.0; 4]; n * n];
         let mut gradients = Vec::with_capacity(na + nb);
         for l in 0..nb {

@@ -1,10 +1,12 @@
 //! The memory variables of viscoelastic element rows ([`crate::attenuation`]): started,
-//! probed for the ledger and emptied of their loss; the row kernel updates them in the step
-//! ([`Viscous`](crate::attenuation::memory::Viscous)).
+//! probed for the ledger and emptied of their loss; the row kernel updates them in the
+//! explicit step ([`Viscous`](crate::attenuation::memory::Viscous)), and Newmark takes their
+//! history force, update and energy from the passes here.
 
-use super::{SemModel, SemWorkspace, LANES};
-use crate::attenuation::memory::{PointLaw, Probe, RowMemory, Start};
+use super::{RowWork, SemModel, SemWorkspace, LANES};
+use crate::attenuation::memory::{History, PointLaw, Probe, Relax, RowMemory, Start, Stored};
 use crate::material::Relaxation;
+use rayon::prelude::*;
 
 impl SemModel {
     /// The shortest relaxation time of the element rows' materials (s); `None` where all are
@@ -59,13 +61,57 @@ impl SemModel {
         work.memory.iter().flatten().map(RowMemory::energy).sum()
     }
 
+    /// Newmark's history force G^T h_n from the memory and the strain of u_n = `u`, into `out`
+    /// (zero on the elastic rows' nodes; [`crate::attenuation::memory`]); the memory is left as
+    /// it was.
+    pub(crate) fn history_forces(&self, u: &[f64], out: &mut [f64], work: &mut SemWorkspace) {
+        let SemWorkspace { rows, memory, .. } = work;
+        rows.par_iter_mut()
+            .zip(memory.par_iter_mut())
+            .enumerate()
+            .for_each(|(r, (row, memory))| match memory {
+                Some(m) => self.row_forces::<History>(r, u, row, m),
+                None => row.force.fill(0.0),
+            });
+        self.gather_lines(rows, out);
+    }
+
+    /// Newmark's memory update to u_{n+1} = `u_next`, its loss added up.
+    pub(crate) fn relax(&self, u_next: &[f64], work: &mut SemWorkspace) {
+        self.memory_pass::<Relax>(u_next, work);
+    }
+
+    /// Newmark's memory energy at t_n from u_n = `u`, the memory left as it was.
+    pub(crate) fn stored_energy(&self, u: &[f64], work: &mut SemWorkspace) -> f64 {
+        for m in work.memory.iter_mut().flatten() {
+            m.clear_energy();
+        }
+        self.memory_pass::<Stored>(u, work);
+        work.memory.iter().flatten().map(RowMemory::energy).sum()
+    }
+
+    /// The rows' force lines gathered into `out` (every node line as [`SemModel::stiffness_times`]
+    /// gathers it, without the springs).
+    fn gather_lines(&self, rows: &[RowWork], out: &mut [f64]) {
+        let nx = self.nx();
+        let (grid, faces) = out.split_at_mut(2 * self.grid_nodes());
+        grid.par_chunks_mut(2 * nx)
+            .enumerate()
+            .for_each(|(j, line)| self.node_line_forces(j, rows, line));
+        if let Some(s) = &self.split {
+            let top = self.gll_y[s.row_below].order() * 2 * nx;
+            faces.copy_from_slice(
+                &rows[s.row_below].force[top + 2 * s.first..top + 2 * (s.last + 1)],
+            );
+        }
+    }
+
     /// The row kernel with law `L` (one without forces) over the viscoelastic rows, in parallel.
     fn memory_pass<L: PointLaw<LANES, State = RowMemory<LANES>>>(
         &self,
         u: &[f64],
         work: &mut SemWorkspace,
     ) {
-        use rayon::prelude::*;
         let SemWorkspace { rows, memory, .. } = work;
         rows.par_iter_mut()
             .zip(memory.par_iter_mut())

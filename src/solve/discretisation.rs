@@ -4,10 +4,13 @@
 //! steppers are generic over it, so linear triangles ([`Fem`]) and spectral elements
 //! ([`crate::sem::SemModel`], which implements it beside its model) run through the same loop.
 
+use super::newmark::{MemoryVariables, NewmarkMemory};
 use super::NewmarkBody;
+use crate::attenuation::memory::newmark_stiffness_change;
 use crate::error::{Error, Result};
 use crate::fem::memory::T3Memory;
 use crate::fem::{Model, StiffnessOperator};
+use crate::material::Material;
 use crate::mesh::Crack;
 use rayon::prelude::*;
 use std::sync::OnceLock;
@@ -49,11 +52,12 @@ pub trait Discretisation: Sync {
         self.lumped_mass().len()
     }
 
-    /// The assembled body Newmark's implicit step factors (its stiffness, mass, dashpots and
-    /// fixed DOFs), with the consistent mass when `consistent_mass` (an error naming
+    /// The assembled body Newmark's implicit step factors at step `dt` (its stiffness, mass,
+    /// dashpots, fixed DOFs and the memory of viscoelastic materials), with the consistent
+    /// mass when `consistent_mass` (an error naming
     /// `integrator.consistent_mass` where the discretisation has none). By default an error
     /// naming `integrator`: a discretisation that only applies K u has no matrix to factor.
-    fn newmark_body(&self, _consistent_mass: bool) -> Result<NewmarkBody<'_>> {
+    fn newmark_body(&self, _consistent_mass: bool, _dt: f64) -> Result<NewmarkBody<'_>> {
         Err(Error::invalid(
             "integrator",
             "newmark",
@@ -179,9 +183,10 @@ impl Discretisation for Fem<'_> {
     fn crack(&self) -> Option<&Crack> {
         self.model.crack.as_ref()
     }
-    /// The model's assembled stiffness, with its lumped or (assembled here) consistent mass.
-    fn newmark_body(&self, consistent_mass: bool) -> Result<NewmarkBody<'_>> {
-        NewmarkBody::t3(self.model, consistent_mass)
+    /// The model's assembled stiffness, with its lumped or (assembled here) consistent mass and
+    /// its viscoelastic triangles' memory.
+    fn newmark_body(&self, consistent_mass: bool, dt: f64) -> Result<NewmarkBody<'_>> {
+        NewmarkBody::t3(self.model, consistent_mass, dt)
     }
     fn stiffness_times(&self, u: &[f64], out: &mut [f64], _: &mut FemWorkspace) {
         self.op().mul(u, out);
@@ -208,12 +213,53 @@ impl Discretisation for Fem<'_> {
             .reduce(f64::min)
     }
     fn start_memory(&self, dt: f64, u_prev: &[f64], work: &mut FemWorkspace) {
-        work.memory = T3Memory::start(self.model, dt, u_prev);
+        work.memory = T3Memory::new(self.model, dt);
+        if let Some(m) = &mut work.memory {
+            m.start(u_prev);
+        }
     }
     fn take_viscous_loss(&self, work: &mut FemWorkspace) -> f64 {
         work.memory.as_mut().map_or(0.0, T3Memory::take_loss)
     }
     fn memory_energy(&self, u: &[f64], work: &mut FemWorkspace) -> f64 {
         work.memory.as_mut().map_or(0.0, |m| m.energy(u))
+    }
+}
+
+/// Newmark on a T3 model ([`super::newmark`]): what the memory of its viscoelastic triangles
+/// changes in the effective matrix at step `dt` (the elements assembled with C_N - C_U), and
+/// the memory; `None` where every material is elastic.
+pub(super) fn t3_newmark_memory(model: &Model, dt: f64) -> Result<Option<NewmarkMemory<'static>>> {
+    let Some(memory) = T3Memory::new(model, dt) else {
+        return Ok(None);
+    };
+    let change: Vec<Material> = (model.materials.iter())
+        .map(|m| Material {
+            stiffness_pa: newmark_stiffness_change(m, dt),
+            relaxation: None,
+            ..m.clone()
+        })
+        .collect();
+    Ok(Some(NewmarkMemory {
+        stiffness_change: crate::fem::assemble_stiffness(&model.mesh, &change)?,
+        variables: Box::new(memory),
+    }))
+}
+
+impl MemoryVariables for T3Memory {
+    fn start(&mut self, u0: &[f64]) {
+        T3Memory::start(self, u0);
+    }
+    fn add_history_forces(&mut self, u: &[f64], rhs: &mut [f64]) {
+        T3Memory::add_history_forces(self, u, rhs);
+    }
+    fn update(&mut self, u_next: &[f64]) {
+        T3Memory::update(self, u_next);
+    }
+    fn take_loss(&mut self) -> f64 {
+        T3Memory::take_loss(self)
+    }
+    fn energy(&mut self, u: &[f64]) -> f64 {
+        self.stored_energy(u)
     }
 }

@@ -309,13 +309,6 @@ fn run_validated<D: Discretisation>(
         crack: body.crack(),
         node_x: &node_x,
     };
-    if body.shortest_relaxation_s().is_some() && config.integrator != Integrator::Explicit {
-        return Err(Error::invalid(
-            "integrator",
-            format!("{:?}", config.integrator),
-            "losses (memory variables) are implemented for the explicit integrator so far",
-        ));
-    }
     match config.integrator {
         Integrator::Explicit | Integrator::FourthOrder => {
             central_difference(body, shape, dt_crit_s, io, config, setup)
@@ -329,10 +322,23 @@ fn run_validated<D: Discretisation>(
                 ));
             }
             refuse_newmark_contact(config, body.crack())?;
-            let assembled = body.newmark_body(consistent_mass)?;
-            newmark(assembled, shape, dt_crit_s, io, config, setup)
+            let dt = newmark_step(body, config)?;
+            let assembled = body.newmark_body(consistent_mass, dt)?;
+            newmark(assembled, shape, (dt, dt_crit_s), io, config, setup)
         }
     }
+}
+
+/// Newmark's step: the one the run gives (Newmark has no critical step to take a fraction
+/// of), checked against the memory variables' shortest relaxation time.
+fn newmark_step<D: Discretisation>(body: &D, config: &RunConfig) -> Result<f64> {
+    let dt = config
+        .dt_s
+        .ok_or_else(|| Error::invalid("dt_s", "none", "Newmark needs an explicit time step"))?;
+    if let Some(tau) = body.shortest_relaxation_s() {
+        crate::attenuation::check_step(tau, dt)?;
+    }
+    Ok(dt)
 }
 
 /// Refuses Newmark on a body whose crack the run asks to make contact (the contact laws
@@ -702,7 +708,8 @@ impl<'a> Explicit<'a> {
 }
 
 /// The fourth-order run ([`fourth_order::FourthOrder`]): its dt_crit is sqrt(3) times
-/// central differences'; contact and periodic ties are refused, naming the integrator.
+/// central differences'; contact, periodic ties, dashpots and losses are refused, naming the
+/// integrator.
 fn fourth_order<D: Discretisation>(
     disc: &D,
     body: BodyShape<'_>,
@@ -717,6 +724,13 @@ fn fourth_order<D: Discretisation>(
     }
     if !disc.periodic_ties().is_empty() {
         return refuse("periodic edges are implemented for the central difference (explicit) only");
+    }
+    if disc.shortest_relaxation_s().is_some() {
+        return refuse(
+            "losses have no fourth-order form, by design: its correction K M^-1 K u would \
+             apply the memory variables' stress twice at different times, and their update \
+             is second order; run losses with the explicit or the newmark integrator",
+        );
     }
     if !disc.dashpots().is_empty() {
         return refuse(
@@ -798,14 +812,11 @@ fn finish_explicit<D: Discretisation, C: ContactLaw>(
 fn newmark(
     body: NewmarkBody<'_>,
     shape: BodyShape<'_>,
-    dt_crit_s: f64,
+    (dt, dt_crit_s): (f64, f64),
     (sources, receivers): (&[Source], &[Receiver]),
     config: &RunConfig,
     setup: Instant,
 ) -> Result<RunOutput> {
-    let dt = config
-        .dt_s
-        .ok_or_else(|| Error::invalid("dt_s", "none", "Newmark needs an explicit time step"))?;
     let steps = run_steps(shape, sources.len(), receivers.len(), config, dt)?;
     let forced = SampledSources::new(sources, dt, steps + 1)?;
     let integrator = format!("Newmark average acceleration ({} mass)", body.mass.name());

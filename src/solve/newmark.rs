@@ -4,6 +4,12 @@
 //! S u_{n+1} = f_{n+1} + M (4/dt^2 u_n + 4/dt v_n + a_n) + C (2/dt u_n + v_n),
 //! a_{n+1} = 4/dt^2 (u_{n+1} - u_n) - 4/dt v_n - a_n, v_{n+1} = v_n + dt/2 (a_n + a_{n+1}).
 //! It conserves 1/2 v^T M v + 1/2 u^T K u exactly without damping and forces.
+//!
+//! Viscoelastic materials ([`NewmarkMemory`]) update their memory variables by the same
+//! trapezoidal rule: S is factored with K_N = K_U + (the memory's change), the right-hand side
+//! gains the history force G^T h_n, and the memory is updated once u_{n+1} is known; the
+//! energy gains the memory's share and the ledger the dissipation
+//! ([`crate::attenuation::memory`] derives both).
 
 use super::ledger::Flows;
 use super::stepper::{EnergySample, Fields, Stepper, Velocity};
@@ -52,8 +58,33 @@ impl Mass<'_> {
     }
 }
 
+/// The memory variables of a viscoelastic body as Newmark advances them (the trapezoidal
+/// update of [`crate::attenuation::memory`], at the run's step).
+pub trait MemoryVariables {
+    /// Zero memory, its strain that of u_0 = `u0`.
+    fn start(&mut self, u0: &[f64]);
+    /// Adds the history force G^T h_n, from the memory and the strain of u_n = `u`, to `rhs`.
+    fn add_history_forces(&mut self, u: &[f64], rhs: &mut [f64]);
+    /// Updates the memory to u_{n+1} = `u_next`.
+    fn update(&mut self, u_next: &[f64]);
+    /// The energy dissipated since the last call (J per m of thickness).
+    fn take_loss(&mut self) -> f64;
+    /// The memory's share of the energy at t_n, from u_n = `u`.
+    fn energy(&mut self, u: &[f64]) -> f64;
+}
+
+/// A viscoelastic body's memory under Newmark: what it changes in the effective matrix,
+/// K_N - K_U (assembled with C_N - C_U = -sum_l beta_l DC_l), and its variables.
+pub struct NewmarkMemory<'a> {
+    /// K_N - K_U, on the stiffness's pattern or within it.
+    pub stiffness_change: BlockCsr,
+    /// The memory variables.
+    pub variables: Box<dyn MemoryVariables + 'a>,
+}
+
 /// What the Newmark scheme needs of a body M u'' + C u' + K u = f: the assembled stiffness,
-/// the mass, the dashpots (diagonal C) and the DOFs held at zero. Built from a T3 model
+/// the mass, the dashpots (diagonal C), the DOFs held at zero and the memory variables of
+/// viscoelastic materials. Built from a T3 model
 /// ([`NewmarkBody::t3`]) or from spectral elements and their assembled stiffness
 /// ([`NewmarkBody::sem`]); a discretisation gives its own
 /// ([`super::Discretisation::newmark_body`]).
@@ -66,11 +97,14 @@ pub struct NewmarkBody<'a> {
     pub dashpots: &'a [(usize, f64)],
     /// DOFs held at zero.
     pub fixed_dofs: &'a [usize],
+    /// The memory variables, where a material relaxes (`stiffness` is then the unrelaxed K_U).
+    pub memory: Option<NewmarkMemory<'a>>,
 }
 
 impl<'a> NewmarkBody<'a> {
-    /// A T3 model with its lumped or (assembled here) consistent mass.
-    pub fn t3(model: &'a Model, consistent_mass: bool) -> Result<Self> {
+    /// A T3 model with its lumped or (assembled here) consistent mass, and the memory
+    /// variables of its viscoelastic triangles at step `dt`.
+    pub fn t3(model: &'a Model, consistent_mass: bool, dt: f64) -> Result<Self> {
         let mass = if consistent_mass {
             Mass::Consistent(assemble_consistent_mass(&model.mesh, &model.materials)?)
         } else {
@@ -81,6 +115,7 @@ impl<'a> NewmarkBody<'a> {
             mass,
             dashpots: &model.dashpots,
             fixed_dofs: &model.fixed_dofs,
+            memory: super::discretisation::t3_newmark_memory(model, dt)?,
         })
     }
 
@@ -196,6 +231,7 @@ pub struct Newmark<'a> {
     stiffness: Cow<'a, BlockCsr>,
     mass: Mass<'a>,
     dashpots: &'a [(usize, f64)],
+    memory: Option<Box<dyn MemoryVariables + 'a>>,
     effective: Factor,
     fixed: Vec<bool>,
     dt: f64,
@@ -213,8 +249,8 @@ pub struct Newmark<'a> {
 
 impl<'a> Newmark<'a> {
     /// The scheme at step `dt` on `body`, from u_0 and v_0 (zero if `None`; fixed DOFs start
-    /// at zero): factors S once and solves M a_0 = f_0 - K u_0 - C v_0. `sources` must hold
-    /// one more sample than the run has steps (f_{n+1} enters step n).
+    /// at zero) and zero memory: factors S once and solves M a_0 = f_0 - K u_0 - C v_0.
+    /// `sources` must hold one more sample than the run has steps (f_{n+1} enters step n).
     pub fn new(
         body: NewmarkBody<'a>,
         dt: f64,
@@ -232,10 +268,16 @@ impl<'a> Newmark<'a> {
             stiffness,
             mass,
             dashpots,
+            memory,
             ..
         } = body;
+        let (stiffness_change, mut memory) =
+            memory.map(|m| (m.stiffness_change, m.variables)).unzip();
         let effective = factor(n, &fixed, |add| {
             stiffness.for_each_entry(&mut *add);
+            if let Some(change) = &stiffness_change {
+                change.for_each_entry(&mut *add);
+            }
             mass.for_each_entry(|i, j, v| add(i, j, 4.0 / (dt * dt) * v));
             for &(d, c) in dashpots {
                 add(d, d, 2.0 / dt * c);
@@ -259,10 +301,14 @@ impl<'a> Newmark<'a> {
         };
         let u = start("initial_displacement", initial_displacement)?;
         let v = start("initial_velocity", initial_velocity)?;
+        if let Some(m) = &mut memory {
+            m.start(&u);
+        }
         let mut stepper = Newmark {
             stiffness,
             mass,
             dashpots,
+            memory,
             effective,
             fixed,
             dt,
@@ -280,7 +326,7 @@ impl<'a> Newmark<'a> {
         Ok(stepper)
     }
 
-    /// a_0 = M^-1 (f_0 - K u_0 - C v_0).
+    /// a_0 = M^-1 (f_0 - K u_0 - C v_0) (with zero memory the stress is C_U eps_0).
     fn initial_acceleration(&mut self) -> Result<Vec<f64>> {
         let (n, work) = (self.u.len(), &mut self.work);
         self.stiffness.mul(&self.u, work);
@@ -315,8 +361,9 @@ impl Stepper for Newmark<'_> {
         self.dt
     }
 
-    /// S u_{n+1} = f_{n+1} + M (4/dt^2 u_n + 4/dt v_n + a_n) + C (2/dt u_n + v_n), then
-    /// a_{n+1} and v_{n+1} (module docs); the source work uses the mean force over the step.
+    /// S u_{n+1} = f_{n+1} + M (4/dt^2 u_n + 4/dt v_n + a_n) + C (2/dt u_n + v_n) (+ the
+    /// history force), then a_{n+1}, v_{n+1} and the memory (module docs); the source work uses
+    /// the mean force over the step.
     fn advance(&mut self, step: usize) -> Result<()> {
         let dt = self.dt;
         let (c1, c2) = (4.0 / (dt * dt), 4.0 / dt);
@@ -332,6 +379,9 @@ impl Stepper for Newmark<'_> {
             col[d] += c * (2.0 / dt * u[d] + v[d]);
         }
         self.sources.add_forces(step + 1, col);
+        if let Some(m) = &mut self.memory {
+            m.add_history_forces(u, col);
+        }
         for (d, &f) in self.fixed.iter().enumerate() {
             if f {
                 col[d] = 0.0;
@@ -355,6 +405,10 @@ impl Stepper for Newmark<'_> {
         for &(d, c) in self.dashpots {
             self.flows.dashpot_loss += c * (u_next[d] - u[d]) * 0.5 * (v[d] + v_next[d]);
         }
+        if let Some(m) = &mut self.memory {
+            m.update(u_next);
+            self.flows.viscous_loss += m.take_loss();
+        }
         Ok(())
     }
 
@@ -372,7 +426,8 @@ impl Stepper for Newmark<'_> {
         std::mem::swap(&mut self.u, &mut self.u_next);
     }
 
-    /// 1/2 v^T M v + 1/2 u^T K u at t_n, which the scheme conserves without damping and forces.
+    /// 1/2 v^T M v + 1/2 u^T K u at t_n, which the scheme conserves without damping and forces,
+    /// and the memory's share.
     fn energy(&mut self, step: usize) -> EnergySample {
         let (u, v, work) = (&self.u, &self.v, &mut self.work);
         self.mass.mul(v, work);
@@ -383,7 +438,7 @@ impl Stepper for Newmark<'_> {
             time_s: step as f64 * self.dt,
             kinetic_j: kinetic,
             strain_j: strain,
-            memory_j: 0.0,
+            memory_j: self.memory.as_mut().map_or(0.0, |m| m.energy(&self.u)),
             flows: self.flows,
         }
     }
