@@ -230,15 +230,21 @@ impl<const W: usize> PointLaw<W> for Viscous {
             .zip(&mut m.e[q * count..(q + 1) * count])
         {
             let (d, g) = (&mech.relaxed, &mech.dissipative);
-            // one simple loop per quantity, each a few vector operations across the lanes
-            let mut abar = [[0.0; W]; 3];
+            let (alpha, beta) = (mech.alpha, mech.beta);
+            // one simple loop per quantity, each a few vector operations across the lanes, on
+            // local copies (stores through `e` inside the loops kept them scalar: 3x the cost)
+            let e_old = *e;
+            let (mut e_new, mut abar) = ([[0.0; W]; 3], [[0.0; W]; 3]);
             for c in 0..3 {
                 for i in 0..W {
-                    let e_new = mech.alpha * e[c][i] + mech.beta * (old[c][i] + eps[c][i]);
-                    abar[c][i] = 0.5 * ((old[c][i] - e[c][i]) + (eps[c][i] - e_new));
-                    e[c][i] = e_new;
+                    e_new[c][i] = alpha * e_old[c][i] + beta * (old[c][i] + eps[c][i]);
+                }
+                for i in 0..W {
+                    abar[c][i] = 0.5 * ((old[c][i] - e_old[c][i]) + (eps[c][i] - e_new[c][i]));
                 }
             }
+            *e = e_new;
+            let e = &e_new;
             for i in 0..W {
                 relaxed[0][i] += d[0] * e[0][i] + d[1] * e[1][i];
             }
@@ -288,27 +294,30 @@ impl<const W: usize> PointLaw<W> for Probe {
         _: [&mut Lanes<W>; 3],
     ) {
         let eps = [*eps[0], *eps[1], *eps[2]];
-        let old = &m.eps_prev[q];
+        let old = m.eps_prev[q];
         let count = m.mechanisms.len();
         let mut energy = [0.0; W];
         for (mech, e) in m.mechanisms.iter().zip(&m.e[q * count..(q + 1) * count]) {
-            for i in 0..W {
-                let (mut a_old, mut a_new) = ([0.0; 3], [0.0; 3]);
-                for c in 0..3 {
+            // across the lanes, on local copies (as in the update)
+            let (mut a_old, mut a_new, mut a_sum) = ([[0.0; W]; 3], [[0.0; W]; 3], [[0.0; W]; 3]);
+            for c in 0..3 {
+                for i in 0..W {
                     let e_new = mech.alpha * e[c][i] + mech.beta * (old[c][i] + eps[c][i]);
-                    a_old[c] = old[c][i] - e[c][i];
-                    a_new[c] = eps[c][i] - e_new;
+                    a_old[c][i] = old[c][i] - e[c][i];
+                    a_new[c][i] = eps[c][i] - e_new;
                 }
-                let a_sum = [
-                    a_old[0] + a_new[0],
-                    a_old[1] + a_new[1],
-                    a_old[2] + a_new[2],
-                ];
-                let strains = [old[0][i], old[1][i], old[2][i]];
-                let now = [eps[0][i], eps[1][i], eps[2][i]];
-                let d = &mech.relaxed;
-                energy[i] += 0.5 * form(d, &a_new, &a_old) - 0.5 * form(d, &now, &strains)
-                    + mech.dt_over_4tau * form(d, &a_old, &a_sum);
+                for i in 0..W {
+                    a_sum[c][i] = a_old[c][i] + a_new[c][i];
+                }
+            }
+            let d = &mech.relaxed;
+            let (kept, strains, lagged) = (
+                form(d, &a_new, &a_old),
+                form(d, &eps, &old),
+                form(d, &a_old, &a_sum),
+            );
+            for i in 0..W {
+                energy[i] += 0.5 * kept[i] - 0.5 * strains[i] + mech.dt_over_4tau * lagged[i];
             }
         }
         for i in 0..W {
@@ -370,22 +379,23 @@ impl<const W: usize> PointLaw<W> for Stored {
         eps: [&Lanes<W>; 3],
         _: [&mut Lanes<W>; 3],
     ) {
+        let eps = [*eps[0], *eps[1], *eps[2]];
         let count = m.mechanisms.len();
         for (mech, e) in m.mechanisms.iter().zip(&m.e[q * count..(q + 1) * count]) {
+            let (own, coupled) = (form(&mech.relaxed, e, e), form(&mech.relaxed, e, &eps));
             for i in 0..W {
-                let e_l = [e[0][i], e[1][i], e[2][i]];
-                let strain = [eps[0][i], eps[1][i], eps[2][i]];
-                let d = &mech.relaxed;
-                m.energy[i] += w[i] * (0.5 * form(d, &e_l, &e_l) - form(d, &e_l, &strain));
+                m.energy[i] += w[i] * (0.5 * own[i] - coupled[i]);
             }
         }
     }
 }
 
-/// x.B y for a block stiffness B.
-fn form(b: &Block, x: &[f64; 3], y: &[f64; 3]) -> f64 {
-    b[0] * x[0] * y[0]
-        + b[1] * (x[0] * y[1] + x[1] * y[0])
-        + b[2] * x[1] * y[1]
-        + b[3] * x[2] * y[2]
+/// x.B y for a block stiffness B, lane by lane.
+fn form<const W: usize>(b: &Block, x: &[Lanes<W>; 3], y: &[Lanes<W>; 3]) -> Lanes<W> {
+    std::array::from_fn(|i| {
+        b[0] * x[0][i] * y[0][i]
+            + b[1] * (x[0][i] * y[1][i] + x[1][i] * y[0][i])
+            + b[2] * x[1][i] * y[1][i]
+            + b[3] * x[2][i] * y[2][i]
+    })
 }
