@@ -12,7 +12,7 @@
 //!   alpha_l = (2 tau_l - dt) / (2 tau_l + dt),  beta_l = dt / (2 tau_l + dt),
 //!
 //! i.e. tau_l (e_{l,n} - e_{l,n-1}) / dt = (a_{n-1} + a_n) / 2 with a = eps - e_l, the strain
-//! of the mechanism's spring. With central differences it keeps an exact discrete energy
+//! of the mechanism's spring (the update computes the loss below from the memory's step). With central differences it keeps an exact discrete energy
 //! balance (docs/src/physics.md, "Losses"): at t_{n-1/2} the stored energy is the elastic
 //! sample of C_U plus
 //!
@@ -129,7 +129,8 @@ struct Mechanism {
     dt_over_4tau: f64,
     /// DC_l = sum_k y_kl C_k (Pa).
     relaxed: Block,
-    /// DC_l / tau_l, of the loss (Pa/s).
+    /// DC_l tau_l / dt^2, of the loss: (1/tau_l) abar.DC_l abar with abar = tau_l Delta e_l / dt
+    /// (Pa/s).
     dissipative: Block,
 }
 
@@ -175,7 +176,7 @@ impl<const W: usize> RowMemory<W> {
                     beta,
                     dt_over_4tau: dt / (4.0 * tau),
                     relaxed,
-                    dissipative: relaxed.map(|d| d / tau),
+                    dissipative: relaxed.map(|d| d * tau / (dt * dt)),
                 }
             })
             .collect();
@@ -222,6 +223,14 @@ impl<const W: usize> PointLaw<W> for Viscous {
         let old = m.eps_prev[q];
         let count = m.mechanisms.len();
         // sum_l DC_l e_{l,n}, and the loss of each lane
+        // eps_{n-1} + eps_n, shared by the mechanisms
+        let mut sum = [[0.0; W]; 3];
+        for c in 0..3 {
+            for i in 0..W {
+                sum[c][i] = old[c][i] + eps[c][i];
+            }
+        }
+        // sum_l DC_l e_{l,n}, and the loss of each lane
         let mut relaxed = [[0.0; W]; 3];
         let mut loss = [0.0; W];
         for (mech, e) in m
@@ -232,15 +241,16 @@ impl<const W: usize> PointLaw<W> for Viscous {
             let (d, g) = (&mech.relaxed, &mech.dissipative);
             let (alpha, beta) = (mech.alpha, mech.beta);
             // one simple loop per quantity, each a few vector operations across the lanes, on
-            // local copies (stores through `e` inside the loops kept them scalar: 3x the cost)
+            // local copies (stores through `e` inside the loops kept them scalar: 3x the cost);
+            // abar = tau (e_{l,n} - e_{l,n-1}) / dt, so the loss takes the memory's step
             let e_old = *e;
-            let (mut e_new, mut abar) = ([[0.0; W]; 3], [[0.0; W]; 3]);
+            let (mut e_new, mut step) = ([[0.0; W]; 3], [[0.0; W]; 3]);
             for c in 0..3 {
                 for i in 0..W {
-                    e_new[c][i] = alpha * e_old[c][i] + beta * (old[c][i] + eps[c][i]);
+                    e_new[c][i] = alpha * e_old[c][i] + beta * sum[c][i];
                 }
                 for i in 0..W {
-                    abar[c][i] = 0.5 * ((old[c][i] - e_old[c][i]) + (eps[c][i] - e_new[c][i]));
+                    step[c][i] = e_new[c][i] - e_old[c][i];
                 }
             }
             *e = e_new;
@@ -255,8 +265,8 @@ impl<const W: usize> PointLaw<W> for Viscous {
                 relaxed[2][i] += d[3] * e[2][i];
             }
             for i in 0..W {
-                let [a0, a1, a2] = [abar[0][i], abar[1][i], abar[2][i]];
-                loss[i] += g[0] * a0 * a0 + 2.0 * g[1] * a0 * a1 + g[2] * a1 * a1 + g[3] * a2 * a2;
+                let [s0, s1, s2] = [step[0][i], step[1][i], step[2][i]];
+                loss[i] += g[0] * s0 * s0 + 2.0 * g[1] * s0 * s1 + g[2] * s1 * s1 + g[3] * s2 * s2;
             }
         }
         for i in 0..W {
