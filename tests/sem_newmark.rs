@@ -7,6 +7,7 @@ use trnews::exact::RollerMode;
 use trnews::material::{Material, Orthotropic, Plane};
 use trnews::sem::SemModel;
 use trnews::signal::Signal;
+use trnews::solve::newmark::{MemoryVariables, NewmarkMemory};
 use trnews::solve::{
     drive, run_on, Integrator, Newmark, NewmarkBody, RunConfig, SampledSources, Stepper,
 };
@@ -245,6 +246,29 @@ fn a_body_put_together_by_hand_is_checked() {
             .expect(field);
         assert!(e.to_string().contains(field), "{e}");
     }
+    // a memory whose stiffness change is another model's
+    struct Inert;
+    impl MemoryVariables for Inert {
+        fn start(&mut self, _: &[f64]) {}
+        fn add_history_forces(&mut self, _: &[f64], _: &mut [f64]) {}
+        fn update(&mut self, _: &[f64]) {}
+        fn take_loss(&mut self) -> f64 {
+            0.0
+        }
+        fn energy(&mut self, _: &[f64]) -> f64 {
+            0.0
+        }
+    }
+    let (other, _) = roller_box(2, 1, 1);
+    let mut b = body(&[], &[], &m.lumped_mass);
+    b.memory = Some(NewmarkMemory {
+        stiffness_change: other.assemble_stiffness(),
+        variables: Box::new(Inert),
+    });
+    let e = Newmark::new(b, dt, sources(), None, None)
+        .err()
+        .expect("memory");
+    assert!(e.to_string().contains("memory.stiffness_change"), "{e}");
     let wrong = vec![0.0; n - 1];
     let b = body(&[], &[], &m.lumped_mass);
     let e = Newmark::new(b, dt, sources(), Some(&wrong), None)

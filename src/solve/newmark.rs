@@ -124,8 +124,8 @@ impl<'a> NewmarkBody<'a> {
         2 * self.stiffness.nodes()
     }
 
-    /// Refuses a mass, a dashpot or a fixed DOF that does not fit the stiffness (the fields
-    /// are public, so a body can be put together by hand).
+    /// Refuses a mass, a memory's stiffness change, a dashpot or a fixed DOF that does not fit
+    /// the stiffness (the fields are public, so a body can be put together by hand).
     fn check(&self) -> Result<()> {
         let n = self.dofs();
         let mass_dofs = match &self.mass {
@@ -138,6 +138,16 @@ impl<'a> NewmarkBody<'a> {
                 format!("{mass_dofs} DOFs"),
                 format!("needs the stiffness's {n}"),
             ));
+        }
+        if let Some(m) = &self.memory {
+            let change = 2 * m.stiffness_change.nodes();
+            if change != n {
+                return Err(Error::invalid(
+                    "memory.stiffness_change",
+                    format!("{change} DOFs"),
+                    format!("needs the stiffness's {n}"),
+                ));
+            }
         }
         let dofs = self.dashpots.iter().map(|d| ("dashpots", d.0));
         let fixed = self.fixed_dofs.iter().map(|&d| ("fixed_dofs", d));
