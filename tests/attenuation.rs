@@ -520,18 +520,22 @@ fn memory_variables_keep_the_unrelaxed_critical_step() {
     }
 }
 
+/// The strip of [`LAYERS`] on linear triangles of h = 25 um.
+fn t3(attenuation: Option<AttenuationSpec>) -> SceneSpec {
+    SceneSpec {
+        element_size_x_m: 25e-6,
+        element_size_y_m: 25e-6,
+        discretisation: DiscretisationSpec::T3,
+        ..strip(1, attenuation)
+    }
+}
+
 /// Linear triangles carry the same losses: the attenuating stack on T3 (h = 25 um, the
 /// scene's step) against the exact solution with the complex moduli is as far off as the
 /// elastic stack is from its own exact solution (the triangles' dispersion, second order in
 /// h, dominates both), and its ledger closes to round-off.
 #[test]
 fn triangles_carry_the_losses_as_accurately_as_they_carry_elastic_waves() {
-    let t3 = |attenuation| SceneSpec {
-        element_size_x_m: 25e-6,
-        element_size_y_m: 25e-6,
-        discretisation: DiscretisationSpec::T3,
-        ..strip(1, attenuation)
-    };
     let dt = Scene::build(&t3(Some(attenuation())))
         .unwrap()
         .default_dt_s();
@@ -611,12 +615,6 @@ fn the_fourth_order_step_and_a_step_beyond_the_band_refuse_losses() {
 /// 0.8-2.6e-4). The ledger closes to the solves' round-off, as the elastic run's.
 #[test]
 fn newmark_carries_the_losses_as_accurately_as_elastic_waves() {
-    let t3 = |attenuation| SceneSpec {
-        element_size_x_m: 25e-6,
-        element_size_y_m: 25e-6,
-        discretisation: DiscretisationSpec::T3,
-        ..strip(1, attenuation)
-    };
     let t3_dt = 4.0
         * Scene::build(&t3(Some(attenuation())))
             .unwrap()
