@@ -3,7 +3,7 @@
 use std::sync::Arc;
 use trnews::scene::{Scene, SceneSpec, TimeDispersionSpec};
 use trnews::signal::{self, Signal};
-use trnews::trnews::{delayed_tr_news, pulse_inversion, tr_news, Responder, TrNewsSpec};
+use trnews::trnews::{delayed_tr_news, pulse_inversion, tr_news, Responder, ScanDrive, TrNewsSpec};
 
 /// The smoke scene: a 6 mm wide, 10-pair laminate (~2.4 mm), receivers 1..4 on top, the
 /// transmitter on the right edge, a 1.2 mm crack 0.8 mm deep under the middle.
@@ -239,4 +239,39 @@ fn time_and_memory_limits_hold_on_the_workers_of_a_parallel_pass_and_delayed_swe
     );
     budget::set_memory_limit(budget::DEFAULT_MEMORY_LIMIT);
     assert!(pass().is_ok(), "the limits are lifted again");
+}
+
+/// A scan is TR-NEWS and delayed TR-NEWS at each position: on the cracked smoke scene its
+/// foci (pulse inversion included) and delayed points are bit-identical to `tr_news` and
+/// `delayed_tr_news` at the same receivers, and its first pass to their chirp run.
+#[test]
+fn a_scan_is_tr_news_at_each_position() {
+    let responder = Responder::new(small(true), 0.0).unwrap();
+    let receivers = [2, 3];
+    let tr_spec = TrNewsSpec {
+        receivers: receivers.to_vec(),
+        ..spec()
+    };
+    let tr = tr_news(&responder, &tr_spec).unwrap();
+    let drive = ScanDrive {
+        delays_s: vec![0.0, 1e-6],
+        amplitudes: vec![1.0, 0.5],
+        half_window_s: 3e-6,
+    };
+    let scan = trnews::trnews::scan(&responder, &spec(), &receivers, &drive).unwrap();
+    assert_eq!(scan.first_pass.responses, tr.responses);
+    for (p, f) in scan.points.iter().zip(&tr.focus) {
+        assert_eq!(p.focus.receiver, f.receiver);
+        assert_eq!(p.focus.focused, f.focused);
+        assert_eq!(p.focus.pi_sum, f.pi_sum);
+        let points = [(drive.delays_s.clone(), drive.amplitudes.clone())];
+        let d = &delayed_tr_news(&responder, &tr, f, &points, drive.half_window_s).unwrap()[0];
+        assert_eq!(p.delayed.simulation, d.simulation);
+        assert_eq!(p.delayed.misfit.to_bits(), d.misfit.to_bits());
+    }
+    // a receiver the scene does not have names the field and the value
+    let e = trnews::trnews::scan(&responder, &spec(), &[9], &drive)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("scan.receivers") && e.contains('9'), "{e}");
 }

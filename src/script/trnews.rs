@@ -1,5 +1,5 @@
-//! Rhai module `trnews`: the TR-NEWS procedure, delayed TR-NEWS and pulse inversion.
-//! Types: `Responder`, `TrNews`, `Focus`, `Delayed`.
+//! Rhai module `trnews`: the TR-NEWS procedure, delayed TR-NEWS, pulse inversion and scans.
+//! Types: `Responder`, `TrNews`, `Focus`, `Delayed`, `Scan`.
 
 use crate::accuracy::Estimate;
 use crate::script::convert::{error, floats, ScriptResult};
@@ -11,13 +11,44 @@ use std::sync::Arc;
 /// A TR-NEWS result shared by its focus and delayed objects.
 pub type TrNewsRef = Arc<TrNews>;
 
+/// A scan, shared by the script values that read it.
+pub type ScanRef = Arc<crate::trnews::Scan>;
+
+/// Options of `trnews::scan(responder, spec, options)`.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScanOptions {
+    /// The receivers scanned (1-based); empty = all.
+    pub receivers: Vec<usize>,
+    /// The delayed drive's delays (s).
+    pub delays_s: Vec<f64>,
+    /// The delayed drive's amplitudes, one per delay.
+    pub amplitudes: Vec<f64>,
+    /// The misfit window's half width around the focus times (s).
+    pub half_window_s: f64,
+}
+
+impl Default for ScanOptions {
+    /// Every receiver; the delayed drive tau = [0, 1 us], a = [1, 1] (the report's Fig. 22
+    /// point with the largest misfit), the delayed sweep's 5 us half window.
+    fn default() -> Self {
+        ScanOptions {
+            receivers: Vec::new(),
+            delays_s: vec![0.0, 1e-6],
+            amplitudes: vec![1.0, 1.0],
+            half_window_s: 5e-6,
+        }
+    }
+}
+
 /// Registers the display names of the custom types.
 pub fn register_types(engine: &mut Engine) {
     engine
         .register_type_with_name::<Responder>("Responder")
         .register_type_with_name::<TrNewsRef>("TrNews")
         .register_type_with_name::<Focus>("Focus")
-        .register_type_with_name::<Delayed>("Delayed");
+        .register_type_with_name::<Delayed>("Delayed")
+        .register_type_with_name::<ScanRef>("Scan");
 }
 
 /// Options of `trnews::responder(scene, duration_s, options)`.
@@ -239,7 +270,7 @@ fn response_map(ctx: &NativeCallContext, out: crate::trnews::Response) -> Script
 
 #[export_module]
 mod trnews_api {
-    use super::{estimate_map, points, ResponderOptions, TrNewsRef};
+    use super::{estimate_map, points, ResponderOptions, ScanOptions, ScanRef, TrNewsRef};
     use crate::script::convert::{options, to_dynamic, WithPosition};
     use crate::script::scene::{index, SceneRef};
     use crate::signal::Signal;
@@ -657,5 +688,72 @@ mod trnews_api {
                 ("residual", e.residual),
             ])
         })
+    }
+
+    /// Scans the focus along the receivers (options #{receivers (1-based, [] = all), delays_s, amplitudes, half_window_s}; defaults: all, [0, 1 us], [1, 1], 5 us): the chirp run once, then per receiver the focusing drive and its inverse (pulse inversion) and the delayed drive, each receiver a work unit stored under points/scan/ (resumed, sharded with --shard, assembled by --merge), with error estimates when the responder has companions.
+    #[rhai_fn(global, return_raw)]
+    pub fn scan(ctx: NativeCallContext, r: Responder, spec: Map, list: Map) -> Res<ScanRef> {
+        let spec: TrNewsSpec = options(&ctx, spec, &TrNewsSpec::default(), "tr_news")?;
+        let o: ScanOptions = options(&ctx, list, &ScanOptions::default(), "scan")?;
+        let drive = crate::trnews::ScanDrive {
+            delays_s: o.delays_s,
+            amplitudes: o.amplitudes,
+            half_window_s: o.half_window_s,
+        };
+        let scan = crate::trnews::scan(&r, &spec, &o.receivers, &drive)
+            .map_err(|e| crate::script::sweep_error(&ctx, e))?;
+        Ok(Arc::new(scan))
+    }
+
+    /// The scan's positions as #{receiver, focus: Focus, delayed: Delayed}, in the order scanned.
+    #[rhai_fn(global, get = "points", pure)]
+    pub fn scan_points(s: &mut ScanRef) -> Array {
+        s.points
+            .iter()
+            .map(|p| {
+                let mut m = Map::new();
+                m.insert("receiver".into(), (p.focus.receiver as INT).into());
+                m.insert("focus".into(), Dynamic::from(p.focus.clone()));
+                m.insert("delayed".into(), Dynamic::from(p.delayed.clone()));
+                Dynamic::from(m)
+            })
+            .collect()
+    }
+
+    /// The scan's chirp run (a TrNews without foci): its responses at every receiver.
+    #[rhai_fn(global, get = "first_pass", pure)]
+    pub fn scan_first_pass(s: &mut ScanRef) -> TrNewsRef {
+        Arc::new(s.first_pass.clone())
+    }
+
+    /// The crack's spectral shift at each scanned position against `baseline` (the uncracked scene's scan of the same receivers): the mean frequency of the first-pass response less the baseline's, as #{value, estimate} (estimate () unless both scans have companions).
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn spectral_shifts(
+        ctx: NativeCallContext,
+        s: &mut ScanRef,
+        baseline: ScanRef,
+    ) -> Res<Array> {
+        let shifts = s.spectral_shifts(&baseline).at(&ctx)?;
+        Ok(shifts
+            .into_iter()
+            .map(|(value, estimate)| {
+                let mut m = Map::new();
+                m.insert("value".into(), value.into());
+                m.insert(
+                    "estimate".into(),
+                    estimate.map_or(Dynamic::UNIT, Dynamic::from),
+                );
+                Dynamic::from(m)
+            })
+            .collect())
+    }
+
+    /// Where a scan's map (values at focus positions x_m, increasing) puts the crack: the run of positions around the map's peak above half its height over the map's floor (its smallest value), ends interpolated: #{from_m, to_m, centre_m, length_m, peak_m}.
+    #[rhai_fn(return_raw)]
+    pub fn localise(ctx: NativeCallContext, x_m: Array, values: Array) -> Res<Dynamic> {
+        let x = crate::script::convert::floats(&ctx, &x_m.into(), "x_m")?;
+        let v = crate::script::convert::floats(&ctx, &values.into(), "values")?;
+        let l = crate::trnews::localise(&x, &v).at(&ctx)?;
+        to_dynamic(&ctx, &l)
     }
 }

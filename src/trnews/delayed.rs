@@ -2,7 +2,7 @@
 //! misfit between the simulation and the linear prediction from y_TR.
 
 use super::channel::{to_record_of, truncate, Responder};
-use super::focus::{Focus, TrNews};
+use super::focus::{Focus, TrNews, TrNewsSpec};
 use crate::accuracy::{Estimate, Refinement};
 use crate::error::{Error, Result};
 use crate::signal::{self, Signal};
@@ -74,23 +74,54 @@ pub fn delayed_tr_news_within(
     half_window_s: f64,
     max_delay_s: f64,
 ) -> Result<Vec<Delayed>> {
-    let mut main = delayed_once(responder, tr, focus, points, half_window_s, max_delay_s)?;
+    let mut foci = vec![focus];
+    for t in &tr.companions {
+        foci.push(
+            t.focus
+                .iter()
+                .find(|f| f.receiver == focus.receiver)
+                .ok_or_else(|| {
+                    Error::invalid("receiver", focus.receiver, "has no companion focus")
+                })?,
+        );
+    }
+    delayed_at(
+        responder,
+        &tr.spec,
+        &foci,
+        points,
+        half_window_s,
+        max_delay_s,
+    )
+}
+
+/// Delayed TR-NEWS of TR-NEWS spec `spec` from the focus at one receiver on each
+/// discretisation, `foci` (the main one, then the responder's companions in order), with the
+/// error estimates when there are companions; as [`delayed_tr_news_within`].
+pub(super) fn delayed_at(
+    responder: &Responder,
+    spec: &TrNewsSpec,
+    foci: &[&Focus],
+    points: &[(Vec<f64>, Vec<f64>)],
+    half_window_s: f64,
+    max_delay_s: f64,
+) -> Result<Vec<Delayed>> {
+    let mut main = delayed_once(responder, spec, foci[0], points, half_window_s, max_delay_s)?;
     if responder.companions.is_empty() {
         return Ok(main);
     }
-    let on = |r: &Responder, t: &TrNews| -> Result<Vec<Delayed>> {
-        let f = t
-            .focus
-            .iter()
-            .find(|f| f.receiver == focus.receiver)
-            .ok_or_else(|| Error::invalid("receiver", focus.receiver, "has no companion focus"))?;
-        delayed_once(r, t, f, points, half_window_s, max_delay_s)
-    };
+    if foci.len() != responder.companions.len() + 1 {
+        return Err(Error::invalid(
+            "receiver",
+            foci[0].receiver,
+            "has no focus on every companion",
+        ));
+    }
     let companions = responder
         .companions
         .iter()
-        .zip(&tr.companions)
-        .map(|(r, t)| on(r, t))
+        .zip(&foci[1..])
+        .map(|(r, f)| delayed_once(r, spec, f, points, half_window_s, max_delay_s))
         .collect::<Result<Vec<_>>>()?;
     let refinement = responder.refinement()?;
     for (k, d) in main.iter_mut().enumerate() {
@@ -137,7 +168,7 @@ fn estimates_of(runs: &[&Delayed], refinement: Refinement) -> Result<DelayedEsti
 /// so that is the largest rounded delay of the sweep).
 fn delayed_once(
     responder: &Responder,
-    tr: &TrNews,
+    spec: &TrNewsSpec,
     focus: &Focus,
     points: &[(Vec<f64>, Vec<f64>)],
     half_window_s: f64,
@@ -159,7 +190,7 @@ fn delayed_once(
         }
         sources.push(signal::delay_and_sum(&focus.source, delays, amplitudes)?);
     }
-    let duration = tr.spec.focus_duration_s() + (max_delay_s / dt).round() * dt;
+    let duration = spec.focus_duration_s() + (max_delay_s / dt).round() * dt;
     let responses = responder.respond_all(&sources, duration)?;
     points
         .iter()
@@ -173,8 +204,8 @@ fn delayed_once(
             let last = longest_delay(delays);
             let first = delays.iter().fold(f64::INFINITY, |m, d| m.min(*d));
             let window = (
-                tr.spec.window_s + first - half_window_s,
-                (tr.spec.window_s + last + half_window_s).min(simulation.t_end_s()),
+                spec.window_s + first - half_window_s,
+                (spec.window_s + last + half_window_s).min(simulation.t_end_s()),
             );
             let misfit = signal::relative_l2(&simulation, &prediction, Some(window))?;
             let peak_of =
@@ -299,7 +330,7 @@ fn expect_delayed(d: &Delayed, dt_s: f64, estimates: bool) -> std::result::Resul
 
 /// A run report in a progress line: steps, energy residual, dt/dt_crit and, with contact,
 /// the capped steps and the largest penetration.
-fn report_note(rep: &RunReport) -> String {
+pub(super) fn report_note(rep: &RunReport) -> String {
     let contact = rep.contact.as_ref().map_or(String::new(), |c| {
         format!(
             ", contact capped steps {}, max penetration {:.2e} m",

@@ -255,7 +255,10 @@ fn tr_news_computed(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> 
         let refinement = responder.refinement()?;
         let runs: Vec<&TrNews> = std::iter::once(&main).chain(&main.companions).collect();
         let estimates = (0..main.focus.len())
-            .map(|i| focus_estimates(&runs, i, refinement))
+            .map(|i| {
+                let foci: Vec<&Focus> = runs.iter().map(|t| &t.focus[i]).collect();
+                focus_estimates(&runs, &foci, refinement)
+            })
             .collect::<Result<Vec<_>>>()?;
         for (f, e) in main.focus.iter_mut().zip(estimates) {
             f.estimates = Some(e);
@@ -264,10 +267,15 @@ fn tr_news_computed(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> 
     Ok(main)
 }
 
-/// The estimates of focus `i` from the main run and its companions, `runs` in the order
+/// The estimates of a focus from its `foci` on the main discretisation and its companions,
+/// with the first passes `runs` they came from, in the order
 /// [`crate::scene::SceneSpec::companions`] gives them.
-fn focus_estimates(runs: &[&TrNews], i: usize, refinement: Refinement) -> Result<FocusEstimates> {
-    let f: Vec<&Focus> = runs.iter().map(|t| &t.focus[i]).collect();
+pub(super) fn focus_estimates(
+    runs: &[&TrNews],
+    foci: &[&Focus],
+    refinement: Refinement,
+) -> Result<FocusEstimates> {
+    let f = foci;
     let values = |q: &dyn Fn(&Focus) -> f64| -> Vec<f64> { f.iter().map(|x| q(x)).collect() };
     let scalar = |q: &dyn Fn(&Focus) -> f64| Estimate::scalar_of(&values(q), refinement);
     let spec = &runs[0].spec;
@@ -311,6 +319,19 @@ fn spec_field(e: Error, names: &[(&str, &str)]) -> Error {
 }
 
 fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
+    let mut pass = first_pass_once(responder, spec)?;
+    let receivers: Vec<usize> = if spec.receivers.is_empty() {
+        (1..=pass.responses.len()).collect()
+    } else {
+        spec.receivers.clone()
+    };
+    pass.focus = foci_once(responder, &pass, &receivers)?;
+    Ok(pass)
+}
+
+/// The chirp run of TR-NEWS on one discretisation: the chirp and the first-pass responses y
+/// at every receiver, no focus yet.
+pub(super) fn first_pass_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
     let peak_pa = responder.peak_drive();
     let chirp = spec.chirp.signal(responder.dt_s, peak_pa).map_err(|e| {
         spec_field(
@@ -321,12 +342,28 @@ fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
     let first = responder
         .respond(&chirp, spec.record_s)
         .map_err(|e| spec_field(e, &[("duration_s", "record_s")]))?;
-    let n_receivers = first.traces.len();
-    let receivers: Vec<usize> = if spec.receivers.is_empty() {
-        (1..=n_receivers).collect()
-    } else {
-        spec.receivers.clone()
-    };
+    Ok(TrNews {
+        spec: spec.clone(),
+        chirp,
+        responses: first.traces,
+        focus: Vec::new(),
+        chirp_report: first.report,
+        companions: Vec::new(),
+        band: responder.band(),
+    })
+}
+
+/// The focusing at each of `receivers` (1-based) from the first pass `pass` on the same
+/// discretisation: Gamma, the drive Gamma(T - t) and its runs (and the inverted drive's, with
+/// pulse inversion).
+pub(super) fn foci_once(
+    responder: &Responder,
+    pass: &TrNews,
+    receivers: &[usize],
+) -> Result<Vec<Focus>> {
+    let (spec, chirp) = (&pass.spec, &pass.chirp);
+    let peak_pa = responder.peak_drive();
+    let n_receivers = pass.responses.len();
     if let Some(&bad) = receivers.iter().find(|&&r| r == 0 || r > n_receivers) {
         return Err(Error::invalid(
             "tr_news.receivers",
@@ -336,9 +373,10 @@ fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
     }
     let mut sources = Vec::with_capacity(receivers.len());
     let mut gammas = Vec::with_capacity(receivers.len());
-    for &r in &receivers {
-        let gamma = signal::xcorr(&first.traces[r - 1], &chirp, 0.0, spec.window_s)?;
-        let reversed = reversed_about_window(&first.traces[r - 1], &chirp, spec.window_s)?;
+    for &r in receivers {
+        let response = &pass.responses[r - 1];
+        let gamma = signal::xcorr(response, chirp, 0.0, spec.window_s)?;
+        let reversed = reversed_about_window(response, chirp, spec.window_s)?;
         let max = reversed.max_abs();
         if !(max > 0.0) {
             return Err(Error::invalid(
@@ -362,7 +400,7 @@ fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
     let responses = responder
         .respond_all(&transmissions, spec.focus_duration_s())
         .map_err(|e| spec_field(e, &[("duration_s", "window_s (its focusing run)")]))?;
-    let focus = receivers
+    receivers
         .iter()
         .enumerate()
         .map(|(k, &r)| {
@@ -379,16 +417,7 @@ fn tr_news_once(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
                 negative,
             )
         })
-        .collect::<Result<Vec<_>>>()?;
-    Ok(TrNews {
-        spec: spec.clone(),
-        chirp,
-        responses: first.traces,
-        focus,
-        chirp_report: first.report,
-        companions: Vec::new(),
-        band: responder.band(),
-    })
+        .collect()
 }
 
 /// Lags of Gamma computed past each end of the window in [`reversed_about_window`], over

@@ -18,6 +18,7 @@ mod channel;
 mod delayed;
 mod focus;
 mod pulse_inversion;
+mod scan;
 
 pub use crate::lab::Recording;
 #[cfg(feature = "io")]
@@ -31,3 +32,4 @@ pub use delayed::{
 };
 pub use focus::{tr_news, Focus, FocusEstimates, TrNews, TrNewsSpec};
 pub use pulse_inversion::{pulse_inversion, PulseInversion};
+pub use scan::{localise, mean_frequency_hz, scan, Localisation, Scan, ScanDrive, ScanPoint};
