@@ -5,7 +5,7 @@
 //! inverse (pulse inversion) and one delayed drive (eqs 10-11), on the responder and its
 //! companions, with every measure's error estimate.
 
-use super::channel::{expect_traces, Responder};
+use super::channel::{expect_traces, Channel, Responder};
 use super::delayed::{delayed_at, report_note, Delayed};
 use super::focus::{first_pass_once, foci_once, focus_estimates, Focus, TrNews, TrNewsSpec};
 use crate::accuracy::{Estimate, Refinement};
@@ -121,6 +121,15 @@ pub fn scan(
         .into());
     }
     check_drive(drive)?;
+    if matches!(r.channel(), Channel::Recorded(_)) {
+        return Err(Error::invalid(
+            "scan",
+            "a recorded channel",
+            "scans a simulated scene or a measured impulse response: recordings hold only the \
+             drives sent in the lab",
+        )
+        .into());
+    }
     let first_pass = shared_first_pass(r, &spec)?;
     let identity = r.identity()?;
     let specs = receivers
