@@ -243,7 +243,8 @@ fn time_and_memory_limits_hold_on_the_workers_of_a_parallel_pass_and_delayed_swe
 
 /// A scan is TR-NEWS and delayed TR-NEWS at each position: on the cracked smoke scene its
 /// foci (pulse inversion included) and delayed points are bit-identical to `tr_news` and
-/// `delayed_tr_news` at the same receivers, and its first pass to their chirp run.
+/// `delayed_tr_news` at the same receivers, and its first pass (a survey's too) to their chirp
+/// run.
 #[test]
 fn a_scan_is_tr_news_at_each_position() {
     let responder = Responder::new(small(true), 0.0).unwrap();
@@ -258,7 +259,7 @@ fn a_scan_is_tr_news_at_each_position() {
         amplitudes: vec![1.0, 0.5],
         half_window_s: 3e-6,
     };
-    let scan = trnews::trnews::scan(&responder, &spec(), &receivers, &drive).unwrap();
+    let scan = trnews::trnews::scan(&responder, &spec(), &receivers, &drive, true).unwrap();
     assert_eq!(scan.first_pass.responses, tr.responses);
     for (p, f) in scan.points.iter().zip(&tr.focus) {
         assert_eq!(p.focus.receiver, f.receiver);
@@ -269,8 +270,12 @@ fn a_scan_is_tr_news_at_each_position() {
         assert_eq!(p.delayed.simulation, d.simulation);
         assert_eq!(p.delayed.misfit.to_bits(), d.misfit.to_bits());
     }
+    // a survey is the scan's chirp run alone
+    let survey = trnews::trnews::scan(&responder, &spec(), &receivers, &drive, false).unwrap();
+    assert!(survey.points.is_empty());
+    assert_eq!(survey.first_pass.responses, scan.first_pass.responses);
     // a receiver the scene does not have names the field and the value
-    let e = trnews::trnews::scan(&responder, &spec(), &[9], &drive)
+    let e = trnews::trnews::scan(&responder, &spec(), &[9], &drive, true)
         .unwrap_err()
         .to_string();
     assert!(e.contains("scan.receivers") && e.contains('9'), "{e}");

@@ -26,6 +26,9 @@ pub struct ScanOptions {
     pub amplitudes: Vec<f64>,
     /// The misfit window's half width around the focus times (s).
     pub half_window_s: f64,
+    /// Focus at every position (true), or survey: the chirp run only, for the spectral
+    /// shifts (false).
+    pub focus: bool,
 }
 
 impl Default for ScanOptions {
@@ -37,6 +40,7 @@ impl Default for ScanOptions {
             delays_s: vec![0.0, 1e-6],
             amplitudes: vec![1.0, 1.0],
             half_window_s: 5e-6,
+            focus: true,
         }
     }
 }
@@ -690,7 +694,7 @@ mod trnews_api {
         })
     }
 
-    /// Scans the focus along the receivers (options #{receivers (1-based, [] = all), delays_s, amplitudes, half_window_s}; defaults: all, [0, 1 us], [1, 1], 5 us): the chirp run once, then per receiver the focusing drive and its inverse (pulse inversion) and the delayed drive, each receiver a work unit stored under points/scan/ (resumed, sharded with --shard, assembled by --merge), with error estimates when the responder has companions.
+    /// Scans the focus along the receivers (options #{receivers (1-based, [] = all), delays_s, amplitudes, half_window_s, focus}; defaults: all, [0, 1 us], [1, 1], 5 us, true; focus = false surveys: the chirp run only, for the spectral shifts): the chirp run once, then per receiver the focusing drive and its inverse (pulse inversion) and the delayed drive, each receiver a work unit stored under points/scan/ (resumed, sharded with --shard, assembled by --merge), with error estimates when the responder has companions.
     #[rhai_fn(global, return_raw)]
     pub fn scan(ctx: NativeCallContext, r: Responder, spec: Map, list: Map) -> Res<ScanRef> {
         let spec: TrNewsSpec = options(&ctx, spec, &TrNewsSpec::default(), "tr_news")?;
@@ -700,12 +704,12 @@ mod trnews_api {
             amplitudes: o.amplitudes,
             half_window_s: o.half_window_s,
         };
-        let scan = crate::trnews::scan(&r, &spec, &o.receivers, &drive)
+        let scan = crate::trnews::scan(&r, &spec, &o.receivers, &drive, o.focus)
             .map_err(|e| crate::script::sweep_error(&ctx, e))?;
         Ok(Arc::new(scan))
     }
 
-    /// The scan's positions as #{receiver, focus: Focus, delayed: Delayed}, in the order scanned.
+    /// The scan's positions as #{receiver, focus: Focus, delayed: Delayed}, in the order scanned ([] for a survey).
     #[rhai_fn(global, get = "points", pure)]
     pub fn scan_points(s: &mut ScanRef) -> Array {
         s.points

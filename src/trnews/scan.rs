@@ -28,9 +28,11 @@ pub struct ScanPoint {
 /// its companions) and the points, in the order of the receivers scanned.
 #[derive(Clone, Debug)]
 pub struct Scan {
+    /// The receivers scanned (1-based), in order.
+    pub receivers: Vec<usize>,
     /// The chirp run: [`TrNews::responses`] at every receiver, no focus.
     pub first_pass: TrNews,
-    /// One point per receiver scanned.
+    /// One point per receiver scanned; none for a survey (the chirp run only).
     pub points: Vec<ScanPoint>,
     /// How the companions refine, with companions.
     pub refinement: Option<Refinement>,
@@ -63,7 +65,7 @@ impl Scan {
             _ => None,
         };
         let runs = if estimated.is_some() { own.len() } else { 1 };
-        receivers(self)
+        self.receivers
             .iter()
             .map(|&k| {
                 let shifts = (0..runs)
@@ -94,12 +96,14 @@ pub struct ScanDrive {
 }
 
 /// Scans `receivers` (1-based; empty = every receiver of the responder) with TR-NEWS of
-/// `spec` (pulse inversion on, whatever `spec` says) and the delayed drive `drive`.
+/// `spec` (pulse inversion on, whatever `spec` says) and the delayed drive `drive`; with
+/// `focus` false, a survey: the chirp run only, for the spectral shifts.
 pub fn scan(
     r: &Responder,
     spec: &TrNewsSpec,
     receivers: &[usize],
     drive: &ScanDrive,
+    focus: bool,
 ) -> std::result::Result<Scan, SweepError> {
     let spec = TrNewsSpec {
         pulse_inversion: true,
@@ -131,6 +135,19 @@ pub fn scan(
         .into());
     }
     let first_pass = shared_first_pass(r, &spec)?;
+    let refinement = if r.companions().is_empty() {
+        None
+    } else {
+        Some(r.refinement()?)
+    };
+    if !focus {
+        return Ok(Scan {
+            receivers,
+            first_pass,
+            points: Vec::new(),
+            refinement,
+        });
+    }
     let identity = r.identity()?;
     let specs = receivers
         .iter()
@@ -163,12 +180,8 @@ pub fn scan(
             .unwrap_or_default();
         sweep.record(i, outcome, start.elapsed().as_secs_f64(), &note)
     })?;
-    let refinement = if estimates {
-        Some(r.refinement()?)
-    } else {
-        None
-    };
     Ok(Scan {
+        receivers,
         first_pass,
         points: sweep.finish()?,
         refinement,
