@@ -274,6 +274,11 @@ fn a_scan_is_tr_news_at_each_position() {
     let survey = trnews::trnews::scan(&responder, &spec(), &receivers, &drive, false).unwrap();
     assert!(survey.points.is_empty());
     assert_eq!(survey.first_pass.responses, scan.first_pass.responses);
+    // its spectral shifts need a baseline of the same receivers
+    let other = trnews::trnews::scan(&responder, &spec(), &[2], &drive, false).unwrap();
+    let e = survey.spectral_shifts(&other).unwrap_err().to_string();
+    assert!(e.contains("baseline") && e.contains("[2]"), "{e}");
+    assert_eq!(survey.spectral_shifts(&scan).unwrap().len(), 2);
     // a receiver the scene does not have names the field and the value
     let e = trnews::trnews::scan(&responder, &spec(), &[9], &drive, true)
         .unwrap_err()

@@ -44,13 +44,11 @@ impl Scan {
     /// scene's scan of the same receivers), with its estimate from the shifts on the
     /// companions when both scans have them.
     pub fn spectral_shifts(&self, baseline: &Scan) -> Result<Vec<(f64, Option<Estimate>)>> {
-        let receivers =
-            |s: &Scan| -> Vec<usize> { s.points.iter().map(|p| p.focus.receiver).collect() };
-        if receivers(self) != receivers(baseline) {
+        if self.receivers != baseline.receivers {
             return Err(Error::invalid(
                 "baseline",
-                format!("receivers {:?}", receivers(baseline)),
-                format!("must be the scan's own receivers, {:?}", receivers(self)),
+                format!("receivers {:?}", baseline.receivers),
+                format!("must be the scan's own receivers, {:?}", self.receivers),
             ));
         }
         let passes = |s: &Scan| -> Vec<TrNews> {
