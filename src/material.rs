@@ -274,6 +274,45 @@ impl Material {
     pub fn is_positive_definite(&self) -> bool {
         is_positive_definite(&self.stiffness_pa)
     }
+
+    /// The material with its principal axes turned by `angle_rad` from x, counter-clockwise:
+    /// its stiffness and its relaxing parts' stiffness by [`rotate_plane_stiffness`].
+    pub fn rotated(&self, angle_rad: f64) -> Material {
+        let mut m = self.clone();
+        m.stiffness_pa = rotate_plane_stiffness(&self.stiffness_pa, angle_rad);
+        if let Some(r) = &mut m.relaxation {
+            for part in &mut r.parts {
+                part.stiffness_pa = rotate_plane_stiffness(&part.stiffness_pa, angle_rad);
+            }
+        }
+        m
+    }
+}
+
+/// A plane stiffness (Voigt xx, yy, xy, engineering shear) whose material axes lie at angle
+/// theta from x, in the x-y frame: C_xy = T^T C T, where T takes the x-y strains to the
+/// material axes' (c = cos theta, s = sin theta):
+///   eps_11 = c^2 e_xx + s^2 e_yy + c s g_xy,  eps_22 = s^2 e_xx + c^2 e_yy - c s g_xy,
+///   g_12 = -2 c s e_xx + 2 c s e_yy + (c^2 - s^2) g_xy
+/// (Jones, *Mechanics of Composite Materials*, 1999, Sec. 2.6), so the strain energy
+/// eps^T C eps is the same in both frames.
+pub fn rotate_plane_stiffness(c: &[[f64; 3]; 3], theta: f64) -> [[f64; 3]; 3] {
+    let (s, co) = theta.sin_cos();
+    let t = [
+        [co * co, s * s, co * s],
+        [s * s, co * co, -co * s],
+        [-2.0 * co * s, 2.0 * co * s, co * co - s * s],
+    ];
+    let mut out = [[0.0; 3]; 3];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, o) in row.iter_mut().enumerate() {
+            *o = (0..3)
+                .flat_map(|k| (0..3).map(move |l| (k, l)))
+                .map(|(k, l)| t[k][i] * c[k][l] * t[l][j])
+                .sum();
+        }
+    }
+    out
 }
 
 /// A material's relaxation: the mechanisms' times and the two parts of its unrelaxed
@@ -347,6 +386,43 @@ impl Relaxation {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Turning the fabric by 90 degrees swaps its x and y moduli and keeps the shear; turning
+    /// by theta then -theta gives it back; an isotropic stiffness does not change; and the
+    /// strain energy of a strain turned with the material is the same (to round-off).
+    #[test]
+    fn rotated_stiffness_turns_with_the_material() {
+        let c = Orthotropic::fabric_0_90()
+            .reduce(Plane::Strain)
+            .unwrap()
+            .stiffness_pa;
+        let q = rotate_plane_stiffness(&c, std::f64::consts::FRAC_PI_2);
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * c[0][0];
+        assert!(close(q[0][0], c[1][1]) && close(q[1][1], c[0][0]) && close(q[2][2], c[2][2]));
+        let back = rotate_plane_stiffness(&rotate_plane_stiffness(&c, 0.7), -0.7);
+        assert!(
+            (0..9).all(|k| close(back[k / 3][k % 3], c[k / 3][k % 3])),
+            "{back:?}"
+        );
+        let iso = Orthotropic::epoxy()
+            .reduce(Plane::Strain)
+            .unwrap()
+            .stiffness_pa;
+        let turned = rotate_plane_stiffness(&iso, 0.4);
+        assert!(
+            (0..9).all(|k| (turned[k / 3][k % 3] - iso[k / 3][k % 3]).abs() <= 1e-12 * iso[0][0])
+        );
+        // a uniaxial strain along the material axis at 0.3 rad, in x-y components
+        let (s, co) = 0.3f64.sin_cos();
+        let e = [co * co, s * s, 2.0 * co * s];
+        let r = rotate_plane_stiffness(&c, 0.3);
+        let energy: f64 = (0..9).map(|k| e[k / 3] * r[k / 3][k % 3] * e[k % 3]).sum();
+        assert!(
+            (energy - c[0][0]).abs() <= 1e-12 * c[0][0],
+            "{energy} vs {}",
+            c[0][0]
+        );
+    }
 
     fn rel(a: f64, b: f64) -> f64 {
         (a - b).abs() / b.abs().max(1e-300)

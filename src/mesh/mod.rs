@@ -6,6 +6,7 @@ use serde::Serialize;
 use std::collections::HashSet;
 
 pub mod gmsh;
+pub mod quad;
 
 /// A side of the rectangular region.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, serde::Deserialize)]

@@ -25,6 +25,7 @@ mod even_odd;
 pub mod gll;
 mod layered;
 mod memory;
+pub mod unstructured;
 
 pub use layered::SemSpec;
 

@@ -188,32 +188,34 @@ impl TrNewsSpec {
 /// of a sweep is stored with its points (see [`crate::sweep::first_pass`]).
 pub fn tr_news(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
     let inputs = (responder.identity()?, spec);
-    let expect = |tr: &TrNews| expect_tr_news(tr, responder, spec);
+    let foci = if spec.receivers.is_empty() {
+        responder.receiver_count()
+    } else {
+        spec.receivers.len()
+    };
+    let expect = |tr: &TrNews| expect_tr_news(tr, responder, spec, foci);
     crate::sweep::first_pass("tr_news", "TR-NEWS first pass", &inputs, &expect, || {
         tr_news_computed(responder, spec)
     })
 }
 
-/// Why a stored first pass cannot be `responder`'s TR-NEWS of `spec`: another spec, a
-/// response per receiver missing, a focus at a receiver that does not exist, pulse inversion
-/// where none was asked (or none where it was), companions other than the responder's.
-fn expect_tr_news(
+/// Why a stored first pass cannot be `responder`'s TR-NEWS of `spec` with `foci` foci (none
+/// for a scan's shared chirp run): another spec, a response per receiver missing, another
+/// number of foci, a focus at a receiver that does not exist, pulse inversion where none was
+/// asked (or none where it was), companions other than the responder's.
+pub(super) fn expect_tr_news(
     tr: &TrNews,
     responder: &Responder,
     spec: &TrNewsSpec,
+    foci: usize,
 ) -> std::result::Result<(), String> {
     if tr.spec != *spec {
         return Err("is the first pass of another TR-NEWS spec".into());
     }
     let n = responder.receiver_count();
     expect_traces(&tr.responses, n, responder.dt_s)?;
-    let wanted = if spec.receivers.is_empty() {
-        n
-    } else {
-        spec.receivers.len()
-    };
-    if tr.focus.len() != wanted {
-        return Err(format!("holds {} foci, not {wanted}", tr.focus.len()));
+    if tr.focus.len() != foci {
+        return Err(format!("holds {} foci, not {foci}", tr.focus.len()));
     }
     for f in &tr.focus {
         if !(1..=n).contains(&f.receiver) {
@@ -241,7 +243,7 @@ fn expect_tr_news(
     tr.companions
         .iter()
         .zip(&responder.companions)
-        .try_for_each(|(t, r)| expect_tr_news(t, r, spec))
+        .try_for_each(|(t, r)| expect_tr_news(t, r, spec, foci))
 }
 
 fn tr_news_computed(responder: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
@@ -587,11 +589,11 @@ mod tests {
             ..Default::default()
         };
         let tr = tr_news_computed(&r, &spec).unwrap();
-        assert_eq!(expect_tr_news(&tr, &r, &spec), Ok(()));
+        assert_eq!(expect_tr_news(&tr, &r, &spec, 2), Ok(()));
         let forged = |change: &dyn Fn(&mut TrNews)| {
             let mut t = tr.clone();
             change(&mut t);
-            expect_tr_news(&t, &r, &spec).unwrap_err()
+            expect_tr_news(&t, &r, &spec, 2).unwrap_err()
         };
         assert!(forged(&|t| t.focus[1].receiver = 9).contains("receiver 9, not within 1..2"));
         assert!(forged(&|t| {

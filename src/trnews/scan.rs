@@ -5,9 +5,11 @@
 //! inverse (pulse inversion) and one delayed drive (eqs 10-11), on the responder and its
 //! companions, with every measure's error estimate.
 
-use super::channel::{expect_traces, Channel, Responder};
+use super::channel::{Channel, Responder};
 use super::delayed::{delayed_at, report_note, Delayed};
-use super::focus::{first_pass_once, foci_once, focus_estimates, Focus, TrNews, TrNewsSpec};
+use super::focus::{
+    expect_tr_news, first_pass_once, foci_once, focus_estimates, Focus, TrNews, TrNewsSpec,
+};
 use crate::accuracy::{Estimate, Refinement};
 use crate::error::{Error, Result};
 use crate::signal::{self, Detrend, Signal, Window};
@@ -230,7 +232,7 @@ fn check_drive(drive: &ScanDrive) -> Result<()> {
 /// The chirp run on the responder and its companions, stored as a first pass.
 fn shared_first_pass(r: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
     let inputs = (r.identity()?, spec);
-    let expect = |tr: &TrNews| expect_first_pass(tr, r, spec);
+    let expect = |tr: &TrNews| expect_tr_news(tr, r, spec, 0);
     crate::sweep::first_pass(
         "scan_first_pass",
         "scan first pass",
@@ -246,32 +248,6 @@ fn shared_first_pass(r: &Responder, spec: &TrNewsSpec) -> Result<TrNews> {
             Ok(main)
         },
     )
-}
-
-/// Why a stored value cannot be `r`'s scan first pass of `spec`.
-fn expect_first_pass(
-    tr: &TrNews,
-    r: &Responder,
-    spec: &TrNewsSpec,
-) -> std::result::Result<(), String> {
-    if tr.spec != *spec {
-        return Err("is the first pass of another TR-NEWS spec".into());
-    }
-    if !tr.focus.is_empty() {
-        return Err("holds foci".into());
-    }
-    expect_traces(&tr.responses, r.receiver_count(), r.dt_s)?;
-    if tr.companions.len() != r.companions.len() {
-        return Err(format!(
-            "holds {} companions, not {}",
-            tr.companions.len(),
-            r.companions.len()
-        ));
-    }
-    tr.companions
-        .iter()
-        .zip(&r.companions)
-        .try_for_each(|(t, c)| expect_first_pass(t, c, spec))
 }
 
 /// Why a stored point cannot be a scan point on step `dt_s`, with `estimates` when the

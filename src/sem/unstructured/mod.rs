@@ -1,0 +1,259 @@
+//! Spectral elements on unstructured quadrilateral meshes (Komatitsch and Tromp 1999;
+//! SPECFEM2D): each element of a [`QuadMesh`], straight-sided or curved, carries the
+//! tensor-product GLL points of one order p, mapped onto it by the element's own geometry;
+//! GLL quadrature gives a diagonal mass, and the stiffness is applied element by element by
+//! sum factorisation with the map's metric at each point.
+//!
+//! The points are numbered once for the whole mesh: an element corner is the mesh's node,
+//! the p - 1 interior points of a side are shared with the element across it (numbered
+//! from the side's lower-numbered corner, so both elements agree), and the (p - 1)^2 interior
+//! points are the element's own. Global node g has DOFs 2 g (x) and 2 g + 1 (y).
+//!
+//! The stiffness product K u (see [`kernel`]) runs in two passes so that its sums are the
+//! same for any thread count: every element's forces at its own points, in parallel over
+//! elements; then every node's sum over the element points that hold it, in a fixed order.
+
+mod kernel;
+#[cfg(test)]
+mod tests;
+
+use super::gll::Gll;
+use super::MAX_ORDER;
+use crate::error::{Error, Result};
+use crate::material::Material;
+use crate::mesh::quad::QuadMesh;
+use std::collections::HashMap;
+
+/// Spectral elements of one order on a quadrilateral mesh: the GLL points, their metric,
+/// each element's stiffness and the diagonal mass.
+#[derive(Clone, Debug)]
+pub struct UnstructuredSem {
+    /// Polynomial order p of every element (p + 1 GLL points per direction).
+    pub order: usize,
+    /// Position of each global node (m).
+    pub positions_m: Vec<[f64; 2]>,
+    /// The plane materials, unrotated.
+    pub materials: Vec<Material>,
+    /// Diagonal mass per DOF, M = sum over elements of rho w_i w_j det J (kg per m of
+    /// thickness).
+    pub lumped_mass: Vec<f64>,
+    /// DOFs held at zero (none unless set).
+    pub fixed_dofs: Vec<usize>,
+    /// (DOF, c) of dashpots (none unless set).
+    pub dashpots: Vec<(usize, f64)>,
+    /// D[i * n + k] = l_k'(x_i), the GLL derivative matrix (n = p + 1).
+    derivative: Vec<f64>,
+    /// The global node of each element point: element e's point (i, j) (i along xi, j along
+    /// eta) at `e * n^2 + j * n + i`.
+    global: Vec<usize>,
+    /// At each element point: (xi_x, xi_y, eta_x, eta_y, w_i w_j det J).
+    metric: Vec<[f64; 5]>,
+    /// Each element's plane stiffness in x-y axes (its material turned by its angle), as
+    /// (C11, C12, C13, C22, C23, C33) (Pa).
+    stiffness: Vec<[f64; 6]>,
+    /// The element points holding global node g: `incidence[incidence_start[g]..
+    /// incidence_start[g + 1]]`, ascending.
+    incidence_start: Vec<usize>,
+    incidence: Vec<usize>,
+}
+
+/// Two positions of one node computed from two elements agree when they are closer than
+/// this fraction of the element's size: the elements share the side's geometry.
+const SHARED_POINT_TOLERANCE: f64 = 1e-9;
+
+impl UnstructuredSem {
+    /// Spectral elements of order `order` on `mesh` (validated here: see
+    /// [`QuadMesh::validate`]) with `materials` indexed by the elements' `material`. Errors
+    /// name what is wrong: an order outside 1..=16, a viscoelastic material (not offered on
+    /// unstructured meshes yet), a side shared by more than two elements, two elements whose
+    /// shared side is not the same curve, a Jacobian <= 0 at a GLL point.
+    pub fn new(mesh: &QuadMesh, materials: Vec<Material>, order: usize) -> Result<Self> {
+        if !(1..=MAX_ORDER).contains(&order) {
+            return Err(Error::invalid(
+                "order",
+                order,
+                format!("must be 1..={MAX_ORDER}"),
+            ));
+        }
+        if let Some(m) = materials.iter().find(|m| m.relaxation.is_some()) {
+            return Err(Error::invalid(
+                "materials",
+                &m.name,
+                "is viscoelastic: losses are not offered on unstructured meshes yet",
+            ));
+        }
+        let mut mesh = mesh.clone();
+        mesh.validate(materials.len(), order + 2)?;
+        let gll = Gll::new(order);
+        let n = order + 1;
+        let global = number_points(&mesh, order)?;
+        let nodes = global.iter().max().map_or(0, |&g| g + 1);
+        let mut positions_m: Vec<Option<[f64; 2]>> = vec![None; nodes];
+        let mut metric = Vec::with_capacity(global.len());
+        let mut lumped_mass = vec![0.0; 2 * nodes];
+        for (e, quad) in mesh.elements.iter().enumerate() {
+            let rho = materials[quad.material].density_kg_m3;
+            let tolerance = SHARED_POINT_TOLERANCE * mesh.corner_span(e);
+            for j in 0..n {
+                for i in 0..n {
+                    let p = mesh.map(e, gll.points[i], gll.points[j]);
+                    let det = p.det();
+                    if det <= 0.0 {
+                        return Err(Error::Mesh(format!(
+                            "element {}: its Jacobian is {det:e} <= 0 at GLL point \
+                             ({i}, {j}) of order {order}: the element is too distorted",
+                            quad.tag
+                        )));
+                    }
+                    let g = global[(e * n + j) * n + i];
+                    match positions_m[g] {
+                        None => positions_m[g] = Some(p.x),
+                        Some(x) if (x[0] - p.x[0]).hypot(x[1] - p.x[1]) <= tolerance => {}
+                        Some(x) => {
+                            return Err(Error::Mesh(format!(
+                                "element {} puts a point of a side it shares at ({:e}, \
+                                 {:e}) m where its neighbour puts it at ({:e}, {:e}) m: \
+                                 the two elements must share the side's nodes",
+                                quad.tag, p.x[0], p.x[1], x[0], x[1]
+                            )))
+                        }
+                    }
+                    let [[x_xi, x_eta], [y_xi, y_eta]] = p.jacobian;
+                    let w = gll.weights[i] * gll.weights[j] * det;
+                    metric.push([y_eta / det, -x_eta / det, -y_xi / det, x_xi / det, w]);
+                    lumped_mass[2 * g] += rho * w;
+                    lumped_mass[2 * g + 1] += rho * w;
+                }
+            }
+        }
+        let stiffness = mesh
+            .elements
+            .iter()
+            .map(|q| {
+                let c = materials[q.material].rotated(q.angle_rad).stiffness_pa;
+                [c[0][0], c[0][1], c[0][2], c[1][1], c[1][2], c[2][2]]
+            })
+            .collect();
+        let (incidence_start, incidence) = incidence(&global, nodes);
+        Ok(UnstructuredSem {
+            order,
+            positions_m: positions_m
+                .into_iter()
+                .map(|x| x.unwrap_or_default())
+                .collect(),
+            materials,
+            lumped_mass,
+            fixed_dofs: Vec::new(),
+            dashpots: Vec::new(),
+            derivative: gll.derivative.iter().flatten().copied().collect(),
+            global,
+            metric,
+            stiffness,
+            incidence_start,
+            incidence,
+        })
+    }
+
+    /// Number of DOFs.
+    pub fn dofs(&self) -> usize {
+        self.lumped_mass.len()
+    }
+
+    /// Number of elements.
+    pub fn elements(&self) -> usize {
+        self.stiffness.len()
+    }
+
+    /// The global node of element `e`'s GLL point (i, j).
+    pub fn node(&self, e: usize, i: usize, j: usize) -> usize {
+        let n = self.order + 1;
+        self.global[(e * n + j) * n + i]
+    }
+
+    /// omega_max^2, the largest eigenvalue of M^-1 K over the `free` DOFs (Lanczos), for the
+    /// critical step 2 / omega_max; with the number of iterations.
+    pub fn max_eigenvalue(&self, free: &[bool]) -> (f64, usize) {
+        let work = std::cell::RefCell::new(self.workspace());
+        crate::solve::stability::lanczos_max_eigenvalue_of(&self.lumped_mass, free, |x, y| {
+            self.stiffness_times(x, y, &mut work.borrow_mut())
+        })
+    }
+}
+
+/// The global node of every element point (see [`UnstructuredSem::global`]), numbered in
+/// the order the elements first reach them; a side held by more than two elements is an
+/// error naming the third.
+fn number_points(mesh: &QuadMesh, order: usize) -> Result<Vec<usize>> {
+    let n = order + 1;
+    let inner = order - 1;
+    let mut next = 0;
+    let mut fresh = |count: usize| {
+        let first = next;
+        next += count;
+        first
+    };
+    let mut corner_node: HashMap<usize, usize> = HashMap::new();
+    // side (lower corner, higher corner) -> (its first interior node, elements holding it)
+    let mut side_node: HashMap<(usize, usize), (usize, usize)> = HashMap::new();
+    let mut global = vec![0; mesh.elements.len() * n * n];
+    for (e, quad) in mesh.elements.iter().enumerate() {
+        let c = mesh.corners(e);
+        let at = |i: usize, j: usize| (e * n + j) * n + i;
+        for (k, (i, j)) in [(0, 0), (order, 0), (order, order), (0, order)]
+            .into_iter()
+            .enumerate()
+        {
+            global[at(i, j)] = *corner_node.entry(c[k]).or_insert_with(|| fresh(1));
+        }
+        // the sides as (start corner, end corner, the element point of the k-th interior
+        // point counted from the start)
+        let sides: [(usize, usize, &dyn Fn(usize) -> (usize, usize)); 4] = [
+            (c[0], c[1], &|k| (k, 0)),
+            (c[1], c[2], &|k| (order, k)),
+            (c[3], c[2], &|k| (k, order)),
+            (c[0], c[3], &|k| (0, k)),
+        ];
+        for (a, b, point) in sides {
+            let key = (a.min(b), a.max(b));
+            let entry = side_node.entry(key).or_insert_with(|| (fresh(inner), 0));
+            entry.1 += 1;
+            if entry.1 > 2 {
+                return Err(Error::Mesh(format!(
+                    "element {} is the third to hold the side between nodes {} and {}: a \
+                     side joins at most two elements",
+                    quad.tag, key.0, key.1
+                )));
+            }
+            for k in 1..order {
+                let along = if a < b { k } else { order - k };
+                let (i, j) = point(k);
+                global[at(i, j)] = entry.0 + along - 1;
+            }
+        }
+        let interior = fresh(inner * inner);
+        for j in 1..order {
+            for i in 1..order {
+                global[at(i, j)] = interior + (j - 1) * inner + (i - 1);
+            }
+        }
+    }
+    Ok(global)
+}
+
+/// For each of `nodes` global nodes, the element points holding it, ascending (CSR).
+fn incidence(global: &[usize], nodes: usize) -> (Vec<usize>, Vec<usize>) {
+    let mut start = vec![0; nodes + 1];
+    for &g in global {
+        start[g + 1] += 1;
+    }
+    for g in 0..nodes {
+        start[g + 1] += start[g];
+    }
+    let mut fill = start.clone();
+    let mut incidence = vec![0; global.len()];
+    for (point, &g) in global.iter().enumerate() {
+        incidence[fill[g]] = point;
+        fill[g] += 1;
+    }
+    (start, incidence)
+}
