@@ -3,6 +3,7 @@
 
 mod counts;
 
+use super::quad::{Quad, QuadMesh};
 use super::Mesh;
 use crate::error::{Error, Result};
 use std::collections::HashMap;
@@ -14,31 +15,15 @@ fn parse(bytes: &[u8]) -> Result<mshio::MshFile<u64, i32, f64>> {
     mshio::parse_msh_bytes(bytes).map_err(|e| Error::Mesh(format!("cannot read the MSH file: {e}")))
 }
 
-/// Reads the linear triangles (`Tri3`) of a Gmsh MSH 4.1 file (ASCII or binary). Each
-/// triangle takes the material that `physical_material` maps its surface's physical group
-/// to; triangles are made counter-clockwise; other element types are ignored. The z
-/// coordinate is dropped.
-pub fn read_msh(bytes: &[u8], physical_material: &HashMap<i32, usize>) -> Result<Mesh> {
-    let msh = parse(bytes)?;
+type Msh = mshio::MshFile<u64, i32, f64>;
+
+/// The nodes of a parsed file (x, y; z dropped) and each node tag's index among them.
+fn nodes_of(msh: &Msh) -> Result<(Vec<[f64; 2]>, HashMap<u64, usize>)> {
     let nodes_section = msh
         .data
         .nodes
+        .as_ref()
         .ok_or_else(|| Error::Mesh("the MSH file has no $Nodes section".into()))?;
-    let elements = msh
-        .data
-        .elements
-        .ok_or_else(|| Error::Mesh("the MSH file has no $Elements section".into()))?;
-    let surface_groups: HashMap<i32, Vec<i32>> = msh
-        .data
-        .entities
-        .map(|e| {
-            e.surfaces
-                .into_iter()
-                .map(|s| (s.tag, s.physical_tags))
-                .collect()
-        })
-        .unwrap_or_default();
-
     let mut nodes = Vec::with_capacity(nodes_section.num_nodes as usize);
     let mut index_of = HashMap::with_capacity(nodes_section.num_nodes as usize);
     let mut next_tag = nodes_section.min_node_tag;
@@ -57,7 +42,78 @@ pub fn read_msh(bytes: &[u8], physical_material: &HashMap<i32, usize>) -> Result
             nodes.push([node.x, node.y]);
         }
     }
+    Ok((nodes, index_of))
+}
 
+/// The physical groups of each surface entity, by the surface's tag.
+fn surface_groups(msh: &Msh) -> HashMap<i32, Vec<i32>> {
+    msh.data
+        .entities
+        .as_ref()
+        .map(|e| {
+            e.surfaces
+                .iter()
+                .map(|s| (s.tag, s.physical_tags.clone()))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// What `physical` maps the first mapped physical group of surface `surface` to; an error
+/// naming the surface and its groups when none is mapped.
+fn surface_value<T: Copy>(
+    groups: &HashMap<i32, Vec<i32>>,
+    physical: &HashMap<i32, T>,
+    surface: i32,
+) -> Result<T> {
+    let groups = groups.get(&surface).map(Vec::as_slice).unwrap_or_default();
+    groups
+        .iter()
+        .find_map(|g| physical.get(g))
+        .copied()
+        .ok_or_else(|| {
+            Error::Mesh(format!(
+                "surface {surface} (physical groups {groups:?}) has no material: map one of its \
+             physical groups"
+            ))
+        })
+}
+
+/// The node indices of an element's first `count` node tags; an error naming the element
+/// and the tag that is not in $Nodes.
+fn element_nodes(
+    element: &mshio::Element<u64>,
+    count: usize,
+    index_of: &HashMap<u64, usize>,
+) -> Result<Vec<usize>> {
+    element
+        .nodes
+        .iter()
+        .take(count)
+        .map(|tag| {
+            index_of.get(tag).copied().ok_or_else(|| {
+                Error::Mesh(format!(
+                    "element {} refers to node {tag}, which is not in $Nodes",
+                    element.element_tag
+                ))
+            })
+        })
+        .collect()
+}
+
+/// Reads the linear triangles (`Tri3`) of a Gmsh MSH 4.1 file (ASCII or binary). Each
+/// triangle takes the material that `physical_material` maps its surface's physical group
+/// to; triangles are made counter-clockwise; other element types are ignored. The z
+/// coordinate is dropped.
+pub fn read_msh(bytes: &[u8], physical_material: &HashMap<i32, usize>) -> Result<Mesh> {
+    let msh = parse(bytes)?;
+    let (nodes, index_of) = nodes_of(&msh)?;
+    let groups = surface_groups(&msh);
+    let elements = msh
+        .data
+        .elements
+        .as_ref()
+        .ok_or_else(|| Error::Mesh("the MSH file has no $Elements section".into()))?;
     let mut mesh = Mesh {
         nodes,
         triangles: Vec::new(),
@@ -70,23 +126,10 @@ pub fn read_msh(bytes: &[u8], physical_material: &HashMap<i32, usize>) -> Result
         .iter()
         .filter(|b| b.element_type == mshio::ElementType::Tri3)
     {
-        let groups = surface_groups
-            .get(&block.entity_tag)
-            .map(Vec::as_slice)
-            .unwrap_or_default();
-        let material = groups.iter().find_map(|g| physical_material.get(g)).copied().ok_or_else(|| {
-            Error::Mesh(format!("surface {} (physical groups {groups:?}) has no material: map one of its physical groups", block.entity_tag))
-        })?;
+        let material = surface_value(&groups, physical_material, block.entity_tag)?;
         for element in &block.elements {
-            let mut t = [0; 3];
-            for (k, tag) in element.nodes.iter().take(3).enumerate() {
-                t[k] = *index_of.get(tag).ok_or_else(|| {
-                    Error::Mesh(format!(
-                        "element {} refers to node {tag}, which is not in $Nodes",
-                        element.element_tag
-                    ))
-                })?;
-            }
+            let n = element_nodes(element, 3, &index_of)?;
+            let mut t = [n[0], n[1], n[2]];
             if mesh.twice_area(t) < 0.0 {
                 t.swap(1, 2);
             }
@@ -103,6 +146,67 @@ pub fn read_msh(bytes: &[u8], physical_material: &HashMap<i32, usize>) -> Result
     Ok(mesh)
 }
 
+/// Reads the quadrilaterals of a Gmsh MSH 4.1 file: 4-node (`Qua4`, straight sides) or
+/// 9-node (`Qua9`, second order: curved sides), all of one kind, for spectral elements
+/// ([`crate::mesh::quad`]). Each takes the (material, angle of its axes in rad) that
+/// `physical` maps its surface's physical group to; point and line elements are ignored.
+/// Triangles, 8-node quadrilaterals or a mix of 4 and 9 nodes are errors naming the
+/// surface, as is a surface without a mapped group; element orientation and shape are
+/// checked by [`QuadMesh::validate`] when the model is built.
+pub fn read_quads(bytes: &[u8], physical: &HashMap<i32, (usize, f64)>) -> Result<QuadMesh> {
+    use mshio::ElementType::{Qua4, Qua9};
+    let msh = parse(bytes)?;
+    let (nodes, index_of) = nodes_of(&msh)?;
+    let groups = surface_groups(&msh);
+    let blocks = msh
+        .data
+        .elements
+        .as_ref()
+        .ok_or_else(|| Error::Mesh("the MSH file has no $Elements section".into()))?;
+    let mut mesh = QuadMesh {
+        nodes,
+        elements: Vec::new(),
+    };
+    let mut kind = None;
+    for block in blocks.element_blocks.iter().filter(|b| b.entity_dim == 2) {
+        let count = match block.element_type {
+            Qua4 => 4,
+            Qua9 => 9,
+            other => {
+                return Err(Error::Mesh(format!(
+                    "surface {} holds {other:?} elements: spectral elements take 4- or \
+                     9-node quadrilaterals only (Gmsh: Mesh.RecombineAll = 1, and \
+                     Mesh.SecondOrderIncomplete = 0 for curved elements)",
+                    block.entity_tag
+                )))
+            }
+        };
+        if *kind.get_or_insert(count) != count {
+            return Err(Error::Mesh(format!(
+                "surface {} holds {count}-node quadrilaterals where others hold {}: mesh \
+                 every surface at one order",
+                block.entity_tag,
+                kind.unwrap_or(count)
+            )));
+        }
+        let (material, angle_rad) = surface_value(&groups, physical, block.entity_tag)?;
+        for element in &block.elements {
+            mesh.elements.push(Quad {
+                nodes: element_nodes(element, count, &index_of)?,
+                material,
+                angle_rad,
+                tag: element.element_tag,
+            });
+        }
+    }
+    if mesh.elements.is_empty() {
+        return Err(Error::Mesh(
+            "the MSH file has no quadrilaterals (Qua4 or Qua9)".into(),
+        ));
+    }
+    Ok(mesh)
+}
+
 /// The points of the linear line elements (`Lin2`) of the curves in physical group `group`
 /// of a Gmsh MSH 4.1 file (each node once, in file order): a crack or an interface drawn
 /// as a physical line. An error when the group has no line element.
@@ -111,28 +215,16 @@ pub fn read_physical_line(bytes: &[u8], group: i32) -> Result<Vec<[f64; 2]>> {
     let curves: Vec<i32> = msh
         .data
         .entities
+        .as_ref()
         .map(|e| {
             e.curves
-                .into_iter()
+                .iter()
                 .filter(|c| c.physical_tags.contains(&group))
                 .map(|c| c.tag)
                 .collect()
         })
         .unwrap_or_default();
-    let mut coordinates = HashMap::new();
-    if let Some(nodes) = &msh.data.nodes {
-        let mut next_tag = nodes.min_node_tag;
-        for block in &nodes.node_blocks {
-            let mut tags: Vec<u64> = (next_tag..next_tag + block.nodes.len() as u64).collect();
-            if let Some(map) = &block.node_tags {
-                map.iter().for_each(|(&tag, &i)| tags[i] = tag);
-            }
-            next_tag += block.nodes.len() as u64;
-            for (tag, node) in tags.into_iter().zip(&block.nodes) {
-                coordinates.insert(tag, [node.x, node.y]);
-            }
-        }
-    }
+    let (nodes, index_of) = nodes_of(&msh)?;
     let mut seen = std::collections::HashSet::new();
     let mut points = Vec::new();
     for block in msh
@@ -143,13 +235,13 @@ pub fn read_physical_line(bytes: &[u8], group: i32) -> Result<Vec<[f64; 2]>> {
         .filter(|b| b.element_type == mshio::ElementType::Lin2 && curves.contains(&b.entity_tag))
     {
         for tag in block.elements.iter().flat_map(|e| e.nodes.iter().take(2)) {
-            let p = coordinates.get(tag).ok_or_else(|| {
+            let p = index_of.get(tag).map(|&i| nodes[i]).ok_or_else(|| {
                 Error::Mesh(format!(
                     "a line element of physical group {group} refers to node {tag}, which is not in $Nodes"
                 ))
             })?;
             if seen.insert(*tag) {
-                points.push(*p);
+                points.push(p);
             }
         }
     }
@@ -195,6 +287,55 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("physical group 6"), "{e}");
+    }
+
+    fn disk(name: &str) -> Vec<u8> {
+        let path = format!("{}/tests/scripts/{name}", env!("CARGO_MANIFEST_DIR"));
+        std::fs::read(path).expect("tests/scripts/gmsh_quads.py writes it")
+    }
+
+    /// The disk written by tests/scripts/gmsh_quads.py: 57 quadrilaterals of 9 nodes (4 of
+    /// 4), each with the material and angle of its group, every boundary node on the circle.
+    #[test]
+    fn reads_curved_and_straight_quadrilaterals() {
+        let physical = HashMap::from([(1, (0, 0.25))]);
+        for (name, count) in [("gmsh_disk_q9.msh", 9), ("gmsh_disk_q4.msh", 4)] {
+            let mesh = read_quads(&disk(name), &physical).unwrap();
+            assert_eq!(mesh.elements.len(), 57, "{name}");
+            assert!(mesh
+                .elements
+                .iter()
+                .all(|q| q.nodes.len() == count && q.material == 0 && q.angle_rad == 0.25));
+            let radius = mesh
+                .nodes
+                .iter()
+                .map(|x| x[0].hypot(x[1]))
+                .fold(0.0, f64::max);
+            assert!((radius - 2e-3).abs() < 1e-12, "{name}: {radius}");
+        }
+    }
+
+    /// Triangles, an unmapped group and a mix of 4 and 9 nodes are refused, naming the
+    /// surface.
+    #[test]
+    fn quadrilateral_meshes_refuse_other_elements() {
+        let e = read_quads(
+            SQUARE.as_bytes(),
+            &HashMap::from([(7, (0, 0.0)), (8, (0, 0.0))]),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("surface 1 holds Tri3") && e.contains("RecombineAll"),
+            "{e}"
+        );
+        let e = read_quads(&disk("gmsh_disk_q9.msh"), &HashMap::new())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("surface 1 (physical groups [1]) has no material"),
+            "{e}"
+        );
     }
 
     #[test]
