@@ -579,6 +579,8 @@ fn a_gmsh_stack_carries_the_plane_wave_of_its_physical_groups() {
         crack_line: None,
         contact: None,
         tied: false,
+        order: None,
+        angles_deg: Default::default(),
         bytes: None,
     });
     let points = [(2.0e-3, 1.2e-3), (2.0e-3, 2.0e-3), (1.7e-3, 0.5e-3)];

@@ -251,6 +251,8 @@ fn bad_sem_scenes_are_errors_naming_the_field() {
             crack_line: None,
             contact: None,
             tied: false,
+            order: None,
+            angles_deg: Default::default(),
             bytes: None,
         }),
         crack: None,

@@ -17,8 +17,11 @@ fn parse(bytes: &[u8]) -> Result<mshio::MshFile<u64, i32, f64>> {
 
 type Msh = mshio::MshFile<u64, i32, f64>;
 
+/// Node positions and each node tag's index among them.
+type Nodes = (Vec<[f64; 2]>, HashMap<u64, usize>);
+
 /// The nodes of a parsed file (x, y; z dropped) and each node tag's index among them.
-fn nodes_of(msh: &Msh) -> Result<(Vec<[f64; 2]>, HashMap<u64, usize>)> {
+fn nodes_of(msh: &Msh) -> Result<Nodes> {
     let nodes_section = msh
         .data
         .nodes

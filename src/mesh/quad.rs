@@ -104,11 +104,10 @@ impl QuadMesh {
             jacobian: [[0.0; 2]; 2],
         };
         for (&n, &(a, b)) in quad.nodes.iter().zip(place) {
-            let xa = self.nodes[n];
-            for c in 0..2 {
-                p.x[c] += lx[a] * ly[b] * xa[c];
-                p.jacobian[c][0] += dlx[a] * ly[b] * xa[c];
-                p.jacobian[c][1] += lx[a] * dly[b] * xa[c];
+            for (c, &xa) in self.nodes[n].iter().enumerate() {
+                p.x[c] += lx[a] * ly[b] * xa;
+                p.jacobian[c][0] += dlx[a] * ly[b] * xa;
+                p.jacobian[c][1] += lx[a] * dly[b] * xa;
             }
         }
         p

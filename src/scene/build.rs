@@ -2,11 +2,12 @@
 //! memory a mesh would take checked before anything is allocated.
 
 use super::crack::CrackPlacement;
-use super::spec::{LaminateSpec, SceneSpec, SourceSpec};
+use super::spec::{GmshSpec, LaminateSpec, SceneSpec, SourceSpec};
 use crate::error::{require_positive, require_within, Error, Result};
 use crate::laminate::{Laminate, Layer};
-use crate::material::{Orthotropic, Plane};
+use crate::material::{Material, Orthotropic, Plane};
 use crate::mesh::Mesh;
+use std::collections::HashMap;
 
 pub(super) fn build_laminate(spec: &LaminateSpec, plane: Plane) -> Result<Laminate> {
     match spec {
@@ -97,7 +98,7 @@ pub(super) type Built = (Laminate, Mesh, Option<CrackPlacement>, Region);
 
 /// Bytes per mesh node of a built scene and its runs (mesh, block-CSR stiffness, mass,
 /// operator stencils, solver vectors), a generous upper figure from the default scenes.
-const BYTES_PER_NODE: f64 = 1024.0;
+pub(super) const BYTES_PER_NODE: f64 = 1024.0;
 
 /// Refuses, before anything is allocated, a mesh (of `orders` GLL intervals per element along
 /// x and across, (1, 1) for T3) that is degenerate (fewer than two columns,
@@ -158,4 +159,41 @@ pub(super) fn check_mesh_size(
         nodes * BYTES_PER_NODE,
         "use larger elements or a smaller region",
     )
+}
+
+/// The bytes of a Gmsh scene's file: those the caller read (scripts read inside their
+/// sandbox), else `gmsh.path` read here.
+pub(super) fn gmsh_bytes(g: &GmshSpec) -> Result<std::sync::Arc<Vec<u8>>> {
+    match &g.bytes {
+        Some(b) => Ok(b.clone()),
+        None => Ok(std::sync::Arc::new(std::fs::read(&g.path).map_err(
+            |e| Error::invalid("gmsh.path", &g.path, format!("cannot be read: {e}")),
+        )?)),
+    }
+}
+
+/// A Gmsh scene's plane materials, in `gmsh.materials` order, and the index of each
+/// physical group's; a key that is not a group tag is an error naming it.
+pub(super) fn gmsh_materials(
+    spec: &SceneSpec,
+    g: &GmshSpec,
+) -> Result<(Vec<Material>, HashMap<i32, usize>)> {
+    let mut materials = Vec::with_capacity(g.materials.len());
+    let mut groups = HashMap::new();
+    for (key, material) in &g.materials {
+        groups.insert(group_tag("gmsh.materials", key)?, materials.len());
+        materials.push(material.constants()?.reduce(spec.plane)?);
+    }
+    Ok((materials, groups))
+}
+
+/// The physical group tag a key of `field` names.
+pub(super) fn group_tag(field: &str, key: &str) -> Result<i32> {
+    key.trim().parse().map_err(|_| {
+        Error::invalid(
+            field,
+            format!("key \"{key}\""),
+            "keys are the tags of physical surface groups, e.g. \"1\"",
+        )
+    })
 }

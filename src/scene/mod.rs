@@ -12,6 +12,7 @@ use crate::error::{require_positive, Error, Result};
 use crate::fem::Model;
 use crate::laminate::Laminate;
 use crate::mesh::Mesh;
+use crate::sem::unstructured::UnstructuredSem;
 use crate::sem::SemModel;
 use crate::signal::Signal;
 use crate::solve::time_dispersion::TimeDispersion;
@@ -25,6 +26,7 @@ mod sem;
 mod sources;
 mod spec;
 mod t3;
+mod unstructured;
 
 use build::check_ranges;
 pub use build::MAX_TRACTION_PA;
@@ -54,6 +56,14 @@ pub enum Body {
         /// The spectral elements.
         model: SemModel,
         /// Their node grid as triangles.
+        nodes: Mesh,
+    },
+    /// Spectral elements on a Gmsh mesh of quadrilaterals, with their GLL nodes as
+    /// triangles (same numbering), as for the layered ones.
+    Unstructured {
+        /// The spectral elements.
+        model: UnstructuredSem,
+        /// Their GLL nodes as triangles.
         nodes: Mesh,
     },
 }
@@ -94,9 +104,11 @@ impl Scene {
         if let Some(contact) = spec.contact() {
             contact.validate()?;
         }
-        let scene = match spec.discretisation.sem_cut(spec) {
-            None => build_t3(spec)?,
-            Some(cut) => sem::build(spec, &cut)?,
+        let quads = spec.gmsh.as_ref().and_then(|g| g.order.map(|p| (g, p)));
+        let scene = match (spec.discretisation.sem_cut(spec), quads) {
+            (None, Some((g, order))) => unstructured::build(spec, g, order)?,
+            (None, None) => build_t3(spec)?,
+            (Some(cut), _) => sem::build(spec, &cut)?,
         };
         crate::budget::check()?;
         let dt_crit = scene.stability.dt_crit_s;
@@ -125,7 +137,7 @@ impl Scene {
     pub fn mesh(&self) -> &Mesh {
         match &self.body {
             Body::T3(model) => &model.mesh,
-            Body::Sem { nodes, .. } => nodes,
+            Body::Sem { nodes, .. } | Body::Unstructured { nodes, .. } => nodes,
         }
     }
 
@@ -134,6 +146,7 @@ impl Scene {
         match &self.body {
             Body::T3(model) => model.dofs(),
             Body::Sem { model, .. } => model.dofs(),
+            Body::Unstructured { model, .. } => model.dofs(),
         }
     }
 
@@ -142,6 +155,7 @@ impl Scene {
         match &self.body {
             Body::T3(model) => model.mesh.triangles.len(),
             Body::Sem { model, .. } => (model.columns_m.len() - 1) * (model.rows_m.len() - 1),
+            Body::Unstructured { model, .. } => model.elements(),
         }
     }
 
@@ -150,6 +164,7 @@ impl Scene {
         match &self.body {
             Body::T3(model) => model.crack.as_ref(),
             Body::Sem { model, .. } => model.crack(),
+            Body::Unstructured { .. } => None,
         }
     }
 
@@ -304,6 +319,9 @@ impl Scene {
                 config,
             )?,
             Body::Sem { model, .. } => {
+                solve::run_on(model, dt_crit_s, &[source], &self.receivers, config)?
+            }
+            Body::Unstructured { model, .. } => {
                 solve::run_on(model, dt_crit_s, &[source], &self.receivers, config)?
             }
         };

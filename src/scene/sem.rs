@@ -12,6 +12,7 @@ use super::{Body, Scene};
 use crate::error::{require_positive, Error, Result};
 use crate::fem::AbsorbingEdge;
 use crate::mesh::{Crack, Grid, Mesh, Side};
+use crate::sem::unstructured::UnstructuredSem;
 use crate::sem::{SemModel, SemSpec, MAX_ORDER};
 use crate::solve::{Quantity, Receiver, StabilityEstimate};
 
@@ -108,7 +109,8 @@ fn check_options(spec: &SceneSpec, cut: &SemSpec) -> Result<()> {
             "discretisation.kind",
             "sem",
             format!(
-                "a Gmsh mesh ({}) is made of linear triangles: use discretisation: #{{kind: \"t3\"}}",
+                "describes the layered rectangle; a Gmsh mesh ({}) takes spectral elements \
+                 by gmsh.order (on its quadrilaterals): keep discretisation: #{{kind: \"t3\"}}",
                 g.path
             ),
         ));
@@ -208,9 +210,38 @@ fn stability(model: &SemModel) -> StabilityEstimate {
 /// ([`SemModel::side_load`], exact for a segment ending inside an element), receivers
 /// interpolated with the same polynomials ([`SemModel::point_weights`]; a point face records
 /// the point itself, not the nearest node) or averaged over a face with the load weights.
-struct OnSem<'a> {
-    model: &'a SemModel,
-    nodes: &'a Mesh,
+/// The layered model and the unstructured one alike ([`GllNodes`]).
+pub(super) struct OnSem<'a, M> {
+    pub(super) model: &'a M,
+    pub(super) nodes: &'a Mesh,
+}
+
+/// What loads and receivers need of spectral elements.
+pub(super) trait GllNodes {
+    /// Per node, the integral of its GLL Lagrange polynomial over the part from..to of
+    /// `side` (along x on the top and bottom, y on the left and right); empty when the part
+    /// covers no element side.
+    fn side_load(&self, side: Side, from: f64, to: f64) -> Vec<(usize, f64)>;
+    /// The interpolation weights of the point (x, y), `None` outside every element.
+    fn point_weights(&self, x: f64, y: f64) -> Option<Vec<(usize, f64)>>;
+}
+
+impl GllNodes for SemModel {
+    fn side_load(&self, side: Side, from: f64, to: f64) -> Vec<(usize, f64)> {
+        SemModel::side_load(self, side, from, to)
+    }
+    fn point_weights(&self, x: f64, y: f64) -> Option<Vec<(usize, f64)>> {
+        SemModel::point_weights(self, x, y)
+    }
+}
+
+impl GllNodes for UnstructuredSem {
+    fn side_load(&self, side: Side, from: f64, to: f64) -> Vec<(usize, f64)> {
+        UnstructuredSem::side_load(self, side, from, to)
+    }
+    fn point_weights(&self, x: f64, y: f64) -> Option<Vec<(usize, f64)>> {
+        UnstructuredSem::point_weights(self, x, y)
+    }
 }
 
 /// The range of the segment p..q along `side`'s coordinate (x on the top and bottom, y on
@@ -223,7 +254,7 @@ fn along(side: Side, p: [f64; 2], q: [f64; 2]) -> (f64, f64) {
     (p[k].min(q[k]), p[k].max(q[k]))
 }
 
-impl Attach for OnSem<'_> {
+impl<M: GllNodes> Attach for OnSem<'_, M> {
     fn mesh(&self) -> &Mesh {
         self.nodes
     }

@@ -33,8 +33,9 @@ pub enum LaminateSpec {
 }
 
 /// A scene meshed by Gmsh: the T3 elements of an MSH 4.1 file (see
-/// [`crate::mesh::gmsh::read_msh`]), materials by physical surface group, and optionally a
-/// crack drawn as a physical line. The region's edges are the sides of the mesh's bounding
+/// [`crate::mesh::gmsh::read_msh`]), or with `order` spectral elements on its quadrilaterals
+/// ([`crate::mesh::gmsh::read_quads`]), materials by physical surface group, and optionally a
+/// crack drawn as a physical line (on triangles). The region's edges are the sides of the mesh's bounding
 /// box (sources, receivers and edge conditions refer to them); `laminate`, `width_m` and
 /// the element sizes are not used.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -55,6 +56,16 @@ pub struct GmshSpec {
     /// Faces tied (the uncracked companion, [`SceneSpec::uncracked`]).
     #[serde(default)]
     pub tied: bool,
+    /// Spectral elements of this polynomial order (1-16) on the file's quadrilaterals (4-node,
+    /// or 9-node for curved sides; [`crate::sem::unstructured`]); `None` (the default):
+    /// linear triangles on its triangles. The scene's `discretisation` describes the layered
+    /// rectangle and stays `t3` with a Gmsh mesh.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub order: Option<usize>,
+    /// The angle of each physical surface group's material axes from x, counter-clockwise
+    /// (degrees), keyed as `materials`; 0 where not given. Spectral elements only.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub angles_deg: std::collections::BTreeMap<String, f64>,
     /// The file's bytes when the caller has read it (scripts read it inside their sandbox);
     /// `None` reads `path`.
     #[serde(skip)]

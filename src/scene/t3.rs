@@ -1,6 +1,6 @@
 //! Scenes on the report's linear triangles: the layer-conforming rectangle or a Gmsh mesh.
 
-use super::build::{build_laminate, check_mesh_size, Built, Region};
+use super::build::{build_laminate, check_mesh_size, gmsh_bytes, gmsh_materials, Built, Region};
 use super::crack::{place_crack, split_stability, CrackPlacement};
 use super::edges::{absorbing_edges, edge_conditions, held_and_pinned_dofs, is_periodic};
 use super::sources::{build_receivers, source_weights, transmitter_weights, Attach};
@@ -54,26 +54,8 @@ fn gmsh_mesh(spec: &SceneSpec, g: &GmshSpec) -> Result<Built> {
             "a Gmsh scene takes its crack from gmsh.crack_line: set crack: ()",
         ));
     }
-    let bytes =
-        match &g.bytes {
-            Some(b) => b.clone(),
-            None => std::sync::Arc::new(std::fs::read(&g.path).map_err(|e| {
-                Error::invalid("gmsh.path", &g.path, format!("cannot be read: {e}"))
-            })?),
-        };
-    let mut materials = Vec::with_capacity(g.materials.len());
-    let mut groups = std::collections::HashMap::new();
-    for (key, material) in &g.materials {
-        let tag: i32 = key.trim().parse().map_err(|_| {
-            Error::invalid(
-                "gmsh.materials",
-                format!("key \"{key}\""),
-                "keys are the tags of physical surface groups, e.g. \"1\"",
-            )
-        })?;
-        groups.insert(tag, materials.len());
-        materials.push(material.constants()?.reduce(spec.plane)?);
-    }
+    let bytes = gmsh_bytes(g)?;
+    let (materials, groups) = gmsh_materials(spec, g)?;
     let mesh = crate::mesh::gmsh::read_msh(&bytes, &groups)
         .map_err(|e| Error::invalid("gmsh.path", &g.path, e.to_string()))?;
     let placement = g

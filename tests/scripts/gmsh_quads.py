@@ -30,3 +30,39 @@ def disk(name, second_order):
 
 disk("gmsh_disk_q9", True)
 disk("gmsh_disk_q4", False)
+
+
+def layered_plate():
+    """gmsh_quad_plate.msh: the 4 mm x 2 mm plate of gmsh_plate.msh without its crack (physical
+    surfaces 1: lower 1.2 mm of 0/90 fabric, 2: upper 0.8 mm of epoxy) as a transfinite grid
+    of 4-node quadrilaterals, 0.5 mm along x and 0.4 mm across: the elements a layered
+    spectral-element scene of those sizes cuts (tests/unstructured_scene.rs compares them)."""
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.add("quad_plate")
+    occ = gmsh.model.occ
+    lower = occ.addRectangle(0, 0, 0, 4e-3, 1.2e-3)
+    upper = occ.addRectangle(0, 1.2e-3, 0, 4e-3, 0.8e-3)
+    occ.fragment([(2, lower), (2, upper)], [])
+    occ.synchronize()
+    for dim, curve in gmsh.model.getEntities(1):
+        (x0, y0, _, x1, y1, _) = gmsh.model.getBoundingBox(dim, curve)
+        if abs(y1 - y0) < 1e-5:
+            points = 9
+        elif y1 <= 1.2e-3 + 1e-5:
+            points = 4
+        else:
+            points = 3
+        gmsh.model.mesh.setTransfiniteCurve(curve, points)
+    for _, surface in gmsh.model.getEntities(2):
+        gmsh.model.mesh.setTransfiniteSurface(surface)
+        gmsh.model.mesh.setRecombine(2, surface)
+    gmsh.model.addPhysicalGroup(2, [lower], 1)
+    gmsh.model.addPhysicalGroup(2, [upper], 2)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.model.mesh.generate(2)
+    gmsh.write("gmsh_quad_plate.msh")
+    gmsh.finalize()
+
+
+layered_plate()

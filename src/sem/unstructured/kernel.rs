@@ -62,22 +62,64 @@ impl UnstructuredSem {
                     f[1] = fy;
                 }
             });
+        for &(d, k) in &self.springs {
+            out[d] += k * u[d];
+        }
+    }
+
+    /// max over elements of the Gershgorin bound of M_e^-1 K_e (K_e's columns from the
+    /// element kernel on unit displacements, M_e the element's share of the GLL mass): an
+    /// upper bound of omega_max^2, so 2 / sqrt of it is a guaranteed stable step (the element
+    /// eigenvalue inequality). Springs are not included.
+    pub fn element_eigenvalue_bound(&self) -> f64 {
+        let nn = (self.order + 1).pow(2);
+        (0..self.elements())
+            .into_par_iter()
+            .map(|e| {
+                let rho = self.materials[self.mesh.elements[e].material].density_kg_m3;
+                let mut row_sums = vec![[0.0; 2]; nn];
+                let mut unit = vec![0.0; 2 * nn];
+                let mut column = vec![[0.0; 2]; nn];
+                for k in 0..2 * nn {
+                    unit[k] = 1.0;
+                    let (ux, uy): (Vec<f64>, Vec<f64>) =
+                        unit.chunks(2).map(|c| (c[0], c[1])).unzip();
+                    self.forces_of(e, &ux, &uy, &mut column);
+                    unit[k] = 0.0;
+                    for (sum, f) in row_sums.iter_mut().zip(&column) {
+                        sum[0] += f[0].abs();
+                        sum[1] += f[1].abs();
+                    }
+                }
+                (0..nn)
+                    .map(|q| {
+                        row_sums[q][0].max(row_sums[q][1]) / (rho * self.metric[e * nn + q][4])
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .reduce(|| 0.0, f64::max)
     }
 
     /// The internal forces of element `e` at its points, from `u` (the module's formula).
     fn element_forces(&self, e: usize, u: &[f64], forces: &mut [[f64; 2]]) {
-        let n = self.order + 1;
-        let nn = n * n;
-        let d = &self.derivative;
-        let global = &self.global[e * nn..(e + 1) * nn];
-        let metric = &self.metric[e * nn..(e + 1) * nn];
-        let [c11, c12, c13, c22, c23, c33] = self.stiffness[e];
+        let nn = (self.order + 1).pow(2);
         let mut ux = [0.0; MAX_POINTS * MAX_POINTS];
         let mut uy = [0.0; MAX_POINTS * MAX_POINTS];
-        for (q, &g) in global.iter().enumerate() {
+        for (q, &g) in self.global[e * nn..(e + 1) * nn].iter().enumerate() {
             ux[q] = u[2 * g];
             uy[q] = u[2 * g + 1];
         }
+        self.forces_of(e, &ux, &uy, forces);
+    }
+
+    /// The internal forces of element `e` at its points from its points' displacements
+    /// `ux`, `uy` (element point order).
+    fn forces_of(&self, e: usize, ux: &[f64], uy: &[f64], forces: &mut [[f64; 2]]) {
+        let n = self.order + 1;
+        let nn = n * n;
+        let d = &self.derivative;
+        let metric = &self.metric[e * nn..(e + 1) * nn];
+        let [c11, c12, c13, c22, c23, c33] = self.stiffness[e];
         // F_xi and F_eta for x and y at every point
         let mut flux = [[0.0; 4]; MAX_POINTS * MAX_POINTS];
         for j in 0..n {

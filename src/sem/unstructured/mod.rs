@@ -13,6 +13,7 @@
 //! same for any thread count: every element's forces at its own points, in parallel over
 //! elements; then every node's sum over the element points that hold it, in a fixed order.
 
+mod boundary;
 mod kernel;
 #[cfg(test)]
 mod tests;
@@ -39,8 +40,14 @@ pub struct UnstructuredSem {
     pub lumped_mass: Vec<f64>,
     /// DOFs held at zero (none unless set).
     pub fixed_dofs: Vec<usize>,
-    /// (DOF, c) of dashpots (none unless set).
+    /// (DOF, c) of dashpots (none unless set, see [`UnstructuredSem::lysmer_dashpots`]).
     pub dashpots: Vec<(usize, f64)>,
+    /// (DOF, k) of the diagonal springs of viscous-spring edges (none unless set, see
+    /// [`UnstructuredSem::viscous_springs`]), added to K u.
+    pub springs: Vec<(usize, f64)>,
+    /// The mesh, its elements counter-clockwise.
+    pub mesh: QuadMesh,
+    gll: Gll,
     /// D[i * n + k] = l_k'(x_i), the GLL derivative matrix (n = p + 1).
     derivative: Vec<f64>,
     /// The global node of each element point: element e's point (i, j) (i along xi, j along
@@ -145,7 +152,10 @@ impl UnstructuredSem {
             lumped_mass,
             fixed_dofs: Vec::new(),
             dashpots: Vec::new(),
+            springs: Vec::new(),
+            mesh,
             derivative: gll.derivative.iter().flatten().copied().collect(),
+            gll,
             global,
             metric,
             stiffness,
@@ -205,15 +215,8 @@ fn number_points(mesh: &QuadMesh, order: usize) -> Result<Vec<usize>> {
         {
             global[at(i, j)] = *corner_node.entry(c[k]).or_insert_with(|| fresh(1));
         }
-        // the sides as (start corner, end corner, the element point of the k-th interior
-        // point counted from the start)
-        let sides: [(usize, usize, &dyn Fn(usize) -> (usize, usize)); 4] = [
-            (c[0], c[1], &|k| (k, 0)),
-            (c[1], c[2], &|k| (order, k)),
-            (c[3], c[2], &|k| (k, order)),
-            (c[0], c[3], &|k| (0, k)),
-        ];
-        for (a, b, point) in sides {
+        let ends = [(c[0], c[1]), (c[1], c[2]), (c[3], c[2]), (c[0], c[3])];
+        for (side, (a, b)) in ends.into_iter().enumerate() {
             let key = (a.min(b), a.max(b));
             let entry = side_node.entry(key).or_insert_with(|| (fresh(inner), 0));
             entry.1 += 1;
@@ -226,7 +229,7 @@ fn number_points(mesh: &QuadMesh, order: usize) -> Result<Vec<usize>> {
             }
             for k in 1..order {
                 let along = if a < b { k } else { order - k };
-                let (i, j) = point(k);
+                let (i, j) = side_point(order, side, k);
                 global[at(i, j)] = entry.0 + along - 1;
             }
         }
@@ -238,6 +241,18 @@ fn number_points(mesh: &QuadMesh, order: usize) -> Result<Vec<usize>> {
         }
     }
     Ok(global)
+}
+
+/// The element point (i, j) of the t-th of the p + 1 GLL points along side `side` of an
+/// element of order `order`, counted from its start corner: side 0 (eta = -1) and side 2
+/// (eta = 1) run along xi, side 1 (xi = 1) and side 3 (xi = -1) along eta.
+fn side_point(order: usize, side: usize, t: usize) -> (usize, usize) {
+    match side {
+        0 => (t, 0),
+        1 => (order, t),
+        2 => (t, order),
+        _ => (0, t),
+    }
 }
 
 /// For each of `nodes` global nodes, the element points holding it, ascending (CSR).

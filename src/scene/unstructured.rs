@@ -1,0 +1,181 @@
+//! Scenes on spectral elements over a Gmsh mesh of quadrilaterals
+//! ([`crate::sem::unstructured`]): materials and their axes' angles by physical surface
+//! group, loads, receivers and edge conditions on the mesh's bounding box as on the layered
+//! rectangle (GLL loads and interpolation, Lysmer-Kuhlemeyer dashpots and viscous springs
+//! with GLL edge weights), and the Lanczos step with the element bound.
+
+use super::build::{gmsh_bytes, gmsh_materials, group_tag, Region, BYTES_PER_NODE};
+use super::edges::{absorbing_edges, edge_conditions, held_and_pinned_dofs, is_periodic};
+use super::sem::OnSem;
+use super::sources::{source_weights, transmitter_weights};
+use super::spec::{GmshSpec, SceneSpec};
+use super::{Body, Scene};
+use crate::error::{Error, Result};
+use crate::laminate::Laminate;
+use crate::mesh::Mesh;
+use crate::sem::unstructured::UnstructuredSem;
+use crate::solve::StabilityEstimate;
+use std::collections::HashMap;
+
+/// The scene on spectral elements of `order` over `g`'s quadrilaterals.
+pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scene> {
+    refuse_unbuilt(spec, g)?;
+    let bytes = gmsh_bytes(g)?;
+    let (materials, groups) = gmsh_materials(spec, g)?;
+    let mut physical: HashMap<i32, (usize, f64)> =
+        groups.iter().map(|(&tag, &m)| (tag, (m, 0.0))).collect();
+    for (key, &degrees) in &g.angles_deg {
+        let tag = group_tag("gmsh.angles_deg", key)?;
+        let entry = physical.get_mut(&tag).ok_or_else(|| {
+            Error::invalid(
+                "gmsh.angles_deg",
+                format!("key \"{key}\""),
+                "names no group of gmsh.materials",
+            )
+        })?;
+        if !degrees.is_finite() {
+            return Err(Error::invalid(
+                format!("gmsh.angles_deg.{key}"),
+                degrees,
+                "must be a finite angle (degrees)",
+            ));
+        }
+        entry.1 = degrees.to_radians();
+    }
+    let mesh = crate::mesh::gmsh::read_quads(&bytes, &physical)
+        .map_err(|e| Error::invalid("gmsh.path", &g.path, e.to_string()))?;
+    let points = mesh.elements.len() as f64 * ((order + 1) as f64).powi(2);
+    crate::budget::check_memory(
+        "gmsh.order",
+        format!(
+            "{order} on {} elements ({points:.3e} GLL points)",
+            mesh.elements.len()
+        ),
+        points * BYTES_PER_NODE,
+        "use a lower order or a coarser mesh",
+    )?;
+    let mut model = UnstructuredSem::new(&mesh, materials.clone(), order)
+        .map_err(|e| Error::invalid("gmsh.path", &g.path, e.to_string()))?;
+    crate::budget::check()?;
+    let nodes = node_triangles(&model);
+    let (x0, x1, y0, y1) = model.bounds();
+    let region = Region {
+        x0,
+        y0,
+        width: x1 - x0,
+        height: y1 - y0,
+    };
+    let conditions = edge_conditions(spec)?;
+    let on = OnSem {
+        model: &model,
+        nodes: &nodes,
+    };
+    let transmitter = if spec.sources.is_empty() {
+        transmitter_weights(&on, &spec.transmitter, region)?
+    } else {
+        source_weights(&on, &spec.sources)?
+    };
+    let receivers = super::build_receivers(&on, &spec.receivers, region.height)?;
+    let absorbing = absorbing_edges(spec, &conditions, &nodes, region)?;
+    let mut fixed = held_and_pinned_dofs(spec, &nodes, &conditions);
+    fixed.sort_unstable();
+    fixed.dedup();
+    model.fixed_dofs = fixed;
+    let sides: Vec<_> = absorbing.iter().map(|a| a.side).collect();
+    model.dashpots = model.lysmer_dashpots(&sides);
+    for edge in &absorbing {
+        if let Some(r) = edge.spring_distance_m {
+            let springs = model.viscous_springs(edge.side, r)?;
+            model.springs.extend(springs);
+        }
+    }
+    let stability = stability(&model);
+    Ok(Scene {
+        spec: spec.clone(),
+        laminate: Laminate {
+            materials,
+            layers: vec![],
+            draws: vec![],
+        },
+        body: Body::Unstructured { model, nodes },
+        transmitter,
+        receivers,
+        crack_placement: None,
+        stability,
+    })
+}
+
+/// Refuses what spectral elements on a Gmsh mesh do not take yet, naming the field: a
+/// crack (line or rectangle), periodic edges, losses.
+fn refuse_unbuilt(spec: &SceneSpec, g: &GmshSpec) -> Result<()> {
+    if let Some(line) = g.crack_line {
+        return Err(Error::invalid(
+            "gmsh.crack_line",
+            line,
+            "cracks on spectral elements of a Gmsh mesh are not built yet: leave gmsh.order \
+             out to run the cracked mesh on linear triangles",
+        ));
+    }
+    if spec.crack.is_some() {
+        return Err(Error::invalid(
+            "crack",
+            "a rectangular crack",
+            "a Gmsh scene takes its crack from gmsh.crack_line: set crack: ()",
+        ));
+    }
+    if is_periodic(&edge_conditions(spec)?) {
+        return Err(Error::invalid(
+            "edges",
+            "periodic",
+            "periodic edges are not built on spectral elements of a Gmsh mesh yet",
+        ));
+    }
+    if spec.attenuation.is_some() {
+        return Err(Error::invalid(
+            "attenuation",
+            "given",
+            "losses are not built on spectral elements of a Gmsh mesh yet",
+        ));
+    }
+    Ok(())
+}
+
+/// The GLL nodes as triangles (each GLL cell split along its rising diagonal), numbered as
+/// the model numbers them: what nodes are selected on, fields plotted on and written as VTU.
+fn node_triangles(model: &UnstructuredSem) -> Mesh {
+    let p = model.order;
+    let mut triangles = Vec::with_capacity(2 * p * p * model.elements());
+    let mut element_material = Vec::with_capacity(triangles.capacity());
+    for (e, quad) in model.mesh.elements.iter().enumerate() {
+        for j in 0..p {
+            for i in 0..p {
+                let (a, b) = (model.node(e, i, j), model.node(e, i + 1, j));
+                let (c, d) = (model.node(e, i + 1, j + 1), model.node(e, i, j + 1));
+                triangles.extend([[a, b, c], [a, c, d]]);
+                element_material.extend([quad.material; 2]);
+            }
+        }
+    }
+    Mesh {
+        nodes: model.positions_m.clone(),
+        triangles,
+        element_material,
+        interfaces_y_m: Vec::new(),
+        grid: None,
+    }
+}
+
+/// dt_crit from the Lanczos estimate over the free DOFs (springs included), and the element
+/// bound ([`UnstructuredSem::element_eigenvalue_bound`]).
+fn stability(model: &UnstructuredSem) -> StabilityEstimate {
+    let mut free = vec![true; model.dofs()];
+    for &d in &model.fixed_dofs {
+        free[d] = false;
+    }
+    let (lambda, iterations) = model.max_eigenvalue(&free);
+    StabilityEstimate {
+        dt_crit_s: 2.0 / lambda.sqrt(),
+        dt_element_bound_s: 2.0 / model.element_eigenvalue_bound().sqrt(),
+        iterations,
+    }
+}
