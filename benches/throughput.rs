@@ -95,6 +95,7 @@ struct Report {
     bandwidth: Vec<Bandwidth>,
     sweep: Vec<SweepRow>,
     sem: Vec<SemRow>,
+    unstructured: Vec<UnstructuredRow>,
     scene: Vec<SceneRow>,
     losses: Vec<LossRow>,
 }
@@ -173,6 +174,41 @@ fn sweep(responder: &tr::Responder, points: usize) -> (f64, f64) {
         clock.elapsed().as_secs_f64(),
         results.iter().fold(0.0, |m, d| m.max(d.misfit)),
     )
+}
+
+/// Unstructured spectral elements against the structured kernel on the same elements.
+#[derive(Serialize)]
+struct UnstructuredRow {
+    order: usize,
+    dofs: usize,
+    threads: usize,
+    structured_ns_per_dof: f64,
+    unstructured_ns_per_dof: f64,
+    steps: usize,
+    structured_step_ns_per_dof_step: f64,
+    unstructured_step_ns_per_dof_step: f64,
+}
+
+/// The rectangular element grid on `columns` x `rows` as 4-node quadrilaterals.
+fn grid_quads(columns: &[f64], rows: &[f64]) -> trnews::mesh::quad::QuadMesh {
+    let nx = columns.len();
+    let nodes = rows
+        .iter()
+        .flat_map(|&y| columns.iter().map(move |&x| [x, y]))
+        .collect();
+    let mut elements = Vec::new();
+    for j in 0..rows.len() - 1 {
+        for i in 0..nx - 1 {
+            let at = |i: usize, j: usize| j * nx + i;
+            elements.push(trnews::mesh::quad::Quad {
+                nodes: vec![at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)],
+                material: 0,
+                angle_rad: 0.0,
+                tag: elements.len() as u64 + 1,
+            });
+        }
+    }
+    trnews::mesh::quad::QuadMesh { nodes, elements }
 }
 
 fn laminate() -> Laminate {
@@ -357,7 +393,7 @@ fn triad(n: usize, threads: usize, reps: usize) -> f64 {
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    // --only SECTION (bandwidth, assembly, step, crack, sweep, sem, scene, losses) runs one section, for profiling.
+    // --only SECTION (bandwidth, assembly, step, crack, sweep, sem, unstructured, scene, losses) runs one section, for profiling.
     let args: Vec<String> = std::env::args().collect();
     let only = args
         .iter()
@@ -764,6 +800,86 @@ fn main() {
         }
     }
 
+    // --- unstructured spectral elements ---------------------------------------------------
+    let mut unstructured_rows = Vec::new();
+    if run_section("unstructured") {
+        println!(
+            "\nUnstructured vs structured spectral elements, same block, elements, order and DOFs (~100k): K u and the explicit step (best of reps):"
+        );
+        let fabric = trnews::material::Orthotropic::preset("fabric_0_90")
+            .and_then(|m| m.reduce(Plane::Strain))
+            .expect("fabric");
+        let reps = if quick { 3 } else { 20 };
+        let steps = if quick { 20 } else { 200 };
+        let step_reps = if quick { 1 } else { 5 };
+        for order in [4, 6, 8] {
+            let ey = ((1e5 / 8.0f64).sqrt() / order as f64).round().max(1.0) as usize;
+            let ex = 4 * ey;
+            let columns: Vec<f64> = (0..=ex).map(|i| i as f64 * WIDTH_M / ex as f64).collect();
+            let rows: Vec<f64> = (0..=ey).map(|j| j as f64 * 4e-3 / ey as f64).collect();
+            let structured = trnews::sem::SemModel::new(
+                columns.clone(),
+                rows.clone(),
+                order,
+                &vec![order; ey],
+                vec![fabric.clone()],
+                vec![0; ey],
+            )
+            .expect("sem");
+            let general = trnews::sem::unstructured::UnstructuredSem::new(
+                &grid_quads(&columns, &rows),
+                vec![fabric.clone()],
+                order,
+            )
+            .expect("unstructured");
+            let n = structured.dofs();
+            assert_eq!(n, general.dofs());
+            let u: Vec<f64> = (0..n).map(|k| (k as f64 * 0.37).sin()).collect();
+            let speeds = fabric.wave_speeds();
+            let gap = (structured.x_nodes_m[1] - structured.x_nodes_m[0])
+                .min(structured.y_nodes_m[1] - structured.y_nodes_m[0]);
+            let dt = 0.1 * gap / speeds.p_x_m_s.max(speeds.p_y_m_s);
+            for &t in &thread_counts {
+                let (ku_s, ku_u) = pool(t).install(|| {
+                    let mut out = vec![0.0; n];
+                    let (mut ws, mut wu) = (structured.workspace(), general.workspace());
+                    let (mut best_s, mut best_u) = (f64::INFINITY, f64::INFINITY);
+                    for _ in 0..reps {
+                        let c = Instant::now();
+                        structured.stiffness_times(&u, &mut out, &mut ws);
+                        best_s = best_s.min(c.elapsed().as_secs_f64());
+                        let c = Instant::now();
+                        general.stiffness_times(&u, &mut out, &mut wu);
+                        best_u = best_u.min(c.elapsed().as_secs_f64());
+                    }
+                    std::hint::black_box(&out);
+                    (best_s * 1e9 / n as f64, best_u * 1e9 / n as f64)
+                });
+                let (step_s, step_u) = pool(t).install(|| {
+                    (
+                        kernel_time(&structured, dt, steps, step_reps) * 1e9 / n as f64,
+                        kernel_time(&general, dt, steps, step_reps) * 1e9 / n as f64,
+                    )
+                });
+                println!(
+                    "  order {order}, {n} DOFs, {t} thread(s): K u structured {ku_s:6.2} ns/DOF, unstructured {ku_u:6.2} (x{:.2}); explicit step structured {step_s:6.2} ns/DOF/step, unstructured {step_u:6.2} (x{:.2})",
+                    ku_u / ku_s,
+                    step_u / step_s
+                );
+                unstructured_rows.push(UnstructuredRow {
+                    order,
+                    dofs: n,
+                    threads: t,
+                    structured_ns_per_dof: ku_s,
+                    unstructured_ns_per_dof: ku_u,
+                    steps,
+                    structured_step_ns_per_dof_step: step_s,
+                    unstructured_step_ns_per_dof_step: step_u,
+                });
+            }
+        }
+    }
+
     // --- the real scene ----------------------------------------------------------------------
     let mut scene_rows = Vec::new();
     if run_section("scene") {
@@ -859,6 +975,7 @@ fn main() {
         losses: loss_rows,
         scene: scene_rows,
         sem: sem_rows,
+        unstructured: unstructured_rows,
         sweep: sweep_rows,
         rayon_threads_available: max_threads,
         assembly,

@@ -206,7 +206,7 @@ impl UnstructuredSem {
             let normal = self.edge_line(side).0;
             for (node, weight, e) in self.side_quadrature(side) {
                 let rho = self.materials[self.mesh.elements[e].material].density_kg_m3;
-                let k = self.stiffness[e];
+                let k = self.element_stiffness(e);
                 let c_nn = if normal == 0 { k[0] } else { k[3] };
                 *c.entry(2 * node + normal).or_default() += (rho * c_nn).sqrt() * weight;
                 *c.entry(2 * node + 1 - normal).or_default() += (rho * k[5]).sqrt() * weight;
@@ -230,7 +230,7 @@ impl UnstructuredSem {
         let normal = self.edge_line(side).0;
         let mut k = BTreeMap::<usize, f64>::new();
         for (node, weight, e) in self.side_quadrature(side) {
-            let g = self.stiffness[e][5];
+            let g = self.element_stiffness(e)[5];
             *k.entry(2 * node + normal).or_default() +=
                 VISCOUS_SPRING_ALPHA_N * g * weight / distance_m;
             *k.entry(2 * node + 1 - normal).or_default() +=

@@ -7,16 +7,88 @@
 //!   f(i, j) = sum_k D[k][i] F_xi(k, j) + sum_l D[l][j] F_eta(i, l),
 //!   F_xi = w det J sigma . grad xi,  F_eta = w det J sigma . grad eta.
 
-use super::UnstructuredSem;
+use super::{Lanes, UnstructuredSem, LANES};
 use crate::solve::Discretisation;
 use rayon::prelude::*;
-
-/// Largest number of GLL points per direction (order 16).
-const MAX_POINTS: usize = super::MAX_ORDER + 1;
 
 /// Elements per parallel task of the element pass, nodes per task of the gather.
 const ELEMENT_CHUNK: usize = 64;
 const NODE_CHUNK: usize = 4096;
+
+/// Runs `$body` with the const `$n` = the number of GLL points per direction, order + 1
+/// (1..=16 checked when the model was built): the element kernel is compiled per order, so
+/// its loops have fixed lengths and its arrays live on the stack at their own size.
+macro_rules! with_points {
+    ($order:expr, $n:ident => $body:expr) => {
+        match $order + 1 {
+            2 => {
+                const $n: usize = 2;
+                $body
+            }
+            3 => {
+                const $n: usize = 3;
+                $body
+            }
+            4 => {
+                const $n: usize = 4;
+                $body
+            }
+            5 => {
+                const $n: usize = 5;
+                $body
+            }
+            6 => {
+                const $n: usize = 6;
+                $body
+            }
+            7 => {
+                const $n: usize = 7;
+                $body
+            }
+            8 => {
+                const $n: usize = 8;
+                $body
+            }
+            9 => {
+                const $n: usize = 9;
+                $body
+            }
+            10 => {
+                const $n: usize = 10;
+                $body
+            }
+            11 => {
+                const $n: usize = 11;
+                $body
+            }
+            12 => {
+                const $n: usize = 12;
+                $body
+            }
+            13 => {
+                const $n: usize = 13;
+                $body
+            }
+            14 => {
+                const $n: usize = 14;
+                $body
+            }
+            15 => {
+                const $n: usize = 15;
+                $body
+            }
+            16 => {
+                const $n: usize = 16;
+                $body
+            }
+            17 => {
+                const $n: usize = 17;
+                $body
+            }
+            n => unreachable!("{n} GLL points: the model checks its order is 1..=16"),
+        }
+    };
+}
 
 /// The scratch of [`UnstructuredSem::stiffness_times`]: every element point's force (x, y),
 /// allocated once per run.
@@ -35,16 +107,7 @@ impl UnstructuredSem {
 
     /// `out = K u`, bit-identical for any number of threads (see the module's doc).
     pub fn stiffness_times(&self, u: &[f64], out: &mut [f64], work: &mut UnstructuredWorkspace) {
-        let n = self.order + 1;
-        let nn = n * n;
-        work.point_forces
-            .par_chunks_mut(ELEMENT_CHUNK * nn)
-            .enumerate()
-            .for_each(|(chunk, forces)| {
-                for (k, element_forces) in forces.chunks_mut(nn).enumerate() {
-                    self.element_forces(chunk * ELEMENT_CHUNK + k, u, element_forces);
-                }
-            });
+        with_points!(self.order, N => self.element_pass::<N>(u, &mut work.point_forces));
         let forces = &work.point_forces;
         out.par_chunks_mut(2 * NODE_CHUNK)
             .enumerate()
@@ -67,100 +130,214 @@ impl UnstructuredSem {
         }
     }
 
+    /// The derivative matrix as an N x N array, D[i][k] = l_k'(x_i).
+    fn derivative_array<const N: usize>(&self) -> [[f64; N]; N] {
+        let mut d = [[0.0; N]; N];
+        for (i, row) in d.iter_mut().enumerate() {
+            row.copy_from_slice(&self.derivative[i * N..(i + 1) * N]);
+        }
+        d
+    }
+
+    /// Every element's forces at its points from `u`, in parallel over chunks of elements,
+    /// LANES elements at a time.
+    fn element_pass<const N: usize>(&self, u: &[f64], point_forces: &mut [[f64; 2]]) {
+        let d = self.derivative_array::<N>();
+        point_forces
+            .par_chunks_mut(ELEMENT_CHUNK * N * N)
+            .enumerate()
+            .for_each(|(chunk, forces)| {
+                for (k, group_forces) in forces.chunks_mut(LANES * N * N).enumerate() {
+                    let group = chunk * ELEMENT_CHUNK / LANES + k;
+                    self.group_forces::<N>(group, &d, u, group_forces);
+                }
+            });
+    }
+
+    /// The forces of lane group `group`'s elements at their points, from `u`, with the widest
+    /// SIMD the CPU offers (the same code compiled for AVX-512 and AVX, chosen at run time,
+    /// as the layered kernel does).
+    fn group_forces<const N: usize>(
+        &self,
+        group: usize,
+        d: &[[f64; N]; N],
+        u: &[f64],
+        forces: &mut [[f64; 2]],
+    ) {
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above), the only requirement
+            // of this target_feature function.
+            return unsafe { self.group_forces_avx512::<N>(group, d, u, forces) };
+        }
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        if std::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU supports AVX (checked just above), the only requirement of
+            // this target_feature function.
+            return unsafe { self.group_forces_avx::<N>(group, d, u, forces) };
+        }
+        self.group_kernel::<N>(group, d, u, forces);
+    }
+
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    #[target_feature(enable = "avx512f")]
+    fn group_forces_avx512<const N: usize>(
+        &self,
+        group: usize,
+        d: &[[f64; N]; N],
+        u: &[f64],
+        forces: &mut [[f64; 2]],
+    ) {
+        self.group_kernel::<N>(group, d, u, forces);
+    }
+
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    #[target_feature(enable = "avx")]
+    fn group_forces_avx<const N: usize>(
+        &self,
+        group: usize,
+        d: &[[f64; N]; N],
+        u: &[f64],
+        forces: &mut [[f64; 2]],
+    ) {
+        self.group_kernel::<N>(group, d, u, forces);
+    }
+
+    /// Gathers the group's displacements, applies [`UnstructuredSem::forces_of`] and writes
+    /// the forces of its elements (the padding lanes' are dropped).
+    #[inline(always)]
+    fn group_kernel<const N: usize>(
+        &self,
+        group: usize,
+        d: &[[f64; N]; N],
+        u: &[f64],
+        forces: &mut [[f64; 2]],
+    ) {
+        let (mut ux, mut uy) = ([[[0.0; LANES]; N]; N], [[[0.0; LANES]; N]; N]);
+        let first = group * LANES * N * N;
+        for (p, &g) in self.global[first..first + forces.len()].iter().enumerate() {
+            let (l, q) = (p / (N * N), p % (N * N));
+            ux[q / N][q % N][l] = u[2 * g];
+            uy[q / N][q % N][l] = u[2 * g + 1];
+        }
+        let (mut fx, mut fy) = ([[[0.0; LANES]; N]; N], [[[0.0; LANES]; N]; N]);
+        self.forces_of::<N>(group, d, (&ux, &uy), (&mut fx, &mut fy));
+        for (p, f) in forces.iter_mut().enumerate() {
+            let (l, q) = (p / (N * N), p % (N * N));
+            *f = [fx[q / N][q % N][l], fy[q / N][q % N][l]];
+        }
+    }
+
+    /// The internal forces `(fx, fy)` of the LANES elements of lane group `group` at their
+    /// points (i along xi, j along eta: `[j][i][lane]`) from their points' displacements
+    /// `(ux, uy)` (the module's formula, each array operation across the lanes).
+    #[allow(clippy::type_complexity)]
+    #[inline(always)]
+    fn forces_of<const N: usize>(
+        &self,
+        group: usize,
+        d: &[[f64; N]; N],
+        (ux, uy): (&[[Lanes; N]; N], &[[Lanes; N]; N]),
+        (fx, fy): (&mut [[Lanes; N]; N], &mut [[Lanes; N]; N]),
+    ) {
+        let metric = &self.metric[group * N * N..(group + 1) * N * N];
+        let [c11, c12, c13, c22, c23, c33] = &self.stiffness[group];
+        // F_xi and F_eta, x and y components, at every point
+        let mut f_xi = [[[[0.0; LANES]; 2]; N]; N];
+        let mut f_eta = [[[[0.0; LANES]; 2]; N]; N];
+        for j in 0..N {
+            for i in 0..N {
+                let (mut ux_xi, mut uy_xi) = ([0.0; LANES], [0.0; LANES]);
+                let (mut ux_eta, mut uy_eta) = ([0.0; LANES], [0.0; LANES]);
+                for k in 0..N {
+                    let (a, b) = (d[i][k], d[j][k]);
+                    for l in 0..LANES {
+                        ux_xi[l] += a * ux[j][k][l];
+                        uy_xi[l] += a * uy[j][k][l];
+                        ux_eta[l] += b * ux[k][i][l];
+                        uy_eta[l] += b * uy[k][i][l];
+                    }
+                }
+                let [xi_x, xi_y, eta_x, eta_y, w] = &metric[j * N + i];
+                for l in 0..LANES {
+                    let e_xx = ux_xi[l] * xi_x[l] + ux_eta[l] * eta_x[l];
+                    let e_yy = uy_xi[l] * xi_y[l] + uy_eta[l] * eta_y[l];
+                    let g_xy = ux_xi[l] * xi_y[l]
+                        + ux_eta[l] * eta_y[l]
+                        + uy_xi[l] * xi_x[l]
+                        + uy_eta[l] * eta_x[l];
+                    let s_xx = w[l] * (c11[l] * e_xx + c12[l] * e_yy + c13[l] * g_xy);
+                    let s_yy = w[l] * (c12[l] * e_xx + c22[l] * e_yy + c23[l] * g_xy);
+                    let s_xy = w[l] * (c13[l] * e_xx + c23[l] * e_yy + c33[l] * g_xy);
+                    f_xi[j][i][0][l] = s_xx * xi_x[l] + s_xy * xi_y[l];
+                    f_xi[j][i][1][l] = s_xy * xi_x[l] + s_yy * xi_y[l];
+                    f_eta[j][i][0][l] = s_xx * eta_x[l] + s_xy * eta_y[l];
+                    f_eta[j][i][1][l] = s_xy * eta_x[l] + s_yy * eta_y[l];
+                }
+            }
+        }
+        for j in 0..N {
+            for i in 0..N {
+                let (mut sx, mut sy) = ([0.0; LANES], [0.0; LANES]);
+                for k in 0..N {
+                    let (a, b) = (d[k][i], d[k][j]);
+                    for l in 0..LANES {
+                        sx[l] += a * f_xi[j][k][0][l] + b * f_eta[k][i][0][l];
+                        sy[l] += a * f_xi[j][k][1][l] + b * f_eta[k][i][1][l];
+                    }
+                }
+                fx[j][i] = sx;
+                fy[j][i] = sy;
+            }
+        }
+    }
+
     /// max over elements of the Gershgorin bound of M_e^-1 K_e (K_e's columns from the
     /// element kernel on unit displacements, M_e the element's share of the GLL mass): an
     /// upper bound of omega_max^2, so 2 / sqrt of it is a guaranteed stable step (the element
     /// eigenvalue inequality). Springs are not included.
     pub fn element_eigenvalue_bound(&self) -> f64 {
-        let nn = (self.order + 1).pow(2);
-        (0..self.elements())
+        with_points!(self.order, N => self.element_bound::<N>())
+    }
+
+    fn element_bound<const N: usize>(&self) -> f64 {
+        let d = self.derivative_array::<N>();
+        (0..self.elements().div_ceil(LANES))
             .into_par_iter()
-            .map(|e| {
-                let rho = self.materials[self.mesh.elements[e].material].density_kg_m3;
-                let mut row_sums = vec![[0.0; 2]; nn];
-                let mut unit = vec![0.0; 2 * nn];
-                let mut column = vec![[0.0; 2]; nn];
-                for k in 0..2 * nn {
-                    unit[k] = 1.0;
-                    let (ux, uy): (Vec<f64>, Vec<f64>) =
-                        unit.chunks(2).map(|c| (c[0], c[1])).unzip();
-                    self.forces_of(e, &ux, &uy, &mut column);
-                    unit[k] = 0.0;
-                    for (sum, f) in row_sums.iter_mut().zip(&column) {
-                        sum[0] += f[0].abs();
-                        sum[1] += f[1].abs();
+            .map(|group| {
+                // row sums of |K_e| for every element of the group at once: unit
+                // displacements at the same point in every lane
+                let mut sums = [[[[0.0; LANES]; N]; N]; 2];
+                for q in 0..N * N {
+                    for c in 0..2 {
+                        let (mut ux, mut uy) = ([[[0.0; LANES]; N]; N], [[[0.0; LANES]; N]; N]);
+                        [&mut ux, &mut uy][c][q / N][q % N] = [1.0; LANES];
+                        let (mut fx, mut fy) = ([[[0.0; LANES]; N]; N], [[[0.0; LANES]; N]; N]);
+                        self.forces_of::<N>(group, &d, (&ux, &uy), (&mut fx, &mut fy));
+                        for (sum, column) in sums.iter_mut().zip([fx, fy]) {
+                            let rows = sum.as_flattened_mut();
+                            for (s, k) in rows.iter_mut().zip(column.as_flattened()) {
+                                for l in 0..LANES {
+                                    s[l] += k[l].abs();
+                                }
+                            }
+                        }
                     }
                 }
-                (0..nn)
-                    .map(|q| {
-                        row_sums[q][0].max(row_sums[q][1]) / (rho * self.metric[e * nn + q][4])
+                let (x_rows, y_rows) = (sums[0].as_flattened(), sums[1].as_flattened());
+                (0..LANES)
+                    .map(|l| group * LANES + l)
+                    .filter(|&e| e < self.elements())
+                    .flat_map(|e| {
+                        let rho = self.materials[self.mesh.elements[e].material].density_kg_m3;
+                        (0..N * N).map(move |q| {
+                            x_rows[q][e % LANES].max(y_rows[q][e % LANES])
+                                / (rho * self.point_weight(e, q))
+                        })
                     })
                     .fold(0.0, f64::max)
             })
             .reduce(|| 0.0, f64::max)
-    }
-
-    /// The internal forces of element `e` at its points, from `u` (the module's formula).
-    fn element_forces(&self, e: usize, u: &[f64], forces: &mut [[f64; 2]]) {
-        let nn = (self.order + 1).pow(2);
-        let mut ux = [0.0; MAX_POINTS * MAX_POINTS];
-        let mut uy = [0.0; MAX_POINTS * MAX_POINTS];
-        for (q, &g) in self.global[e * nn..(e + 1) * nn].iter().enumerate() {
-            ux[q] = u[2 * g];
-            uy[q] = u[2 * g + 1];
-        }
-        self.forces_of(e, &ux, &uy, forces);
-    }
-
-    /// The internal forces of element `e` at its points from its points' displacements
-    /// `ux`, `uy` (element point order).
-    fn forces_of(&self, e: usize, ux: &[f64], uy: &[f64], forces: &mut [[f64; 2]]) {
-        let n = self.order + 1;
-        let nn = n * n;
-        let d = &self.derivative;
-        let metric = &self.metric[e * nn..(e + 1) * nn];
-        let [c11, c12, c13, c22, c23, c33] = self.stiffness[e];
-        // F_xi and F_eta for x and y at every point
-        let mut flux = [[0.0; 4]; MAX_POINTS * MAX_POINTS];
-        for j in 0..n {
-            for i in 0..n {
-                let (mut ux_xi, mut uy_xi, mut ux_eta, mut uy_eta) = (0.0, 0.0, 0.0, 0.0);
-                for k in 0..n {
-                    let (a, b) = (d[i * n + k], d[j * n + k]);
-                    ux_xi += a * ux[j * n + k];
-                    uy_xi += a * uy[j * n + k];
-                    ux_eta += b * ux[k * n + i];
-                    uy_eta += b * uy[k * n + i];
-                }
-                let q = j * n + i;
-                let [xi_x, xi_y, eta_x, eta_y, w] = metric[q];
-                let e_xx = ux_xi * xi_x + ux_eta * eta_x;
-                let e_yy = uy_xi * xi_y + uy_eta * eta_y;
-                let g_xy = ux_xi * xi_y + ux_eta * eta_y + uy_xi * xi_x + uy_eta * eta_x;
-                let s_xx = c11 * e_xx + c12 * e_yy + c13 * g_xy;
-                let s_yy = c12 * e_xx + c22 * e_yy + c23 * g_xy;
-                let s_xy = c13 * e_xx + c23 * e_yy + c33 * g_xy;
-                flux[q] = [
-                    w * (s_xx * xi_x + s_xy * xi_y),
-                    w * (s_xy * xi_x + s_yy * xi_y),
-                    w * (s_xx * eta_x + s_xy * eta_y),
-                    w * (s_xy * eta_x + s_yy * eta_y),
-                ];
-            }
-        }
-        for j in 0..n {
-            for i in 0..n {
-                let (mut fx, mut fy) = (0.0, 0.0);
-                for k in 0..n {
-                    let (a, b) = (d[k * n + i], d[k * n + j]);
-                    let along_xi = &flux[j * n + k];
-                    let along_eta = &flux[k * n + i];
-                    fx += a * along_xi[0] + b * along_eta[2];
-                    fy += a * along_xi[1] + b * along_eta[3];
-                }
-                forces[j * n + i] = [fx, fy];
-            }
-        }
     }
 }
 

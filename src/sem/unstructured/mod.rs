@@ -53,16 +53,27 @@ pub struct UnstructuredSem {
     /// The global node of each element point: element e's point (i, j) (i along xi, j along
     /// eta) at `e * n^2 + j * n + i`.
     global: Vec<usize>,
-    /// At each element point: (xi_x, xi_y, eta_x, eta_y, w_i w_j det J).
-    metric: Vec<[f64; 5]>,
+    /// At each element point, (xi_x, xi_y, eta_x, eta_y, w_i w_j det J), lane-major: point
+    /// q of element e at `[(e / LANES) * n^2 + q][component][e % LANES]` (the kernel runs
+    /// LANES elements at once, see [`kernel`]); padding lanes past the last element are 0.
+    metric: Vec<[Lanes; 5]>,
     /// Each element's plane stiffness in x-y axes (its material turned by its angle), as
-    /// (C11, C12, C13, C22, C23, C33) (Pa).
-    stiffness: Vec<[f64; 6]>,
+    /// (C11, C12, C13, C22, C23, C33) (Pa), lane-major: `[e / LANES][entry][e % LANES]`.
+    stiffness: Vec<[Lanes; 6]>,
+    /// The number of elements.
+    elements: usize,
     /// The element points holding global node g: `incidence[incidence_start[g]..
     /// incidence_start[g + 1]]`, ascending.
     incidence_start: Vec<usize>,
     incidence: Vec<usize>,
 }
+
+/// Elements processed at once by the kernel, one per f64 SIMD lane of its array operations
+/// (8: two AVX2 registers, as the layered kernel's).
+pub(crate) const LANES: usize = 8;
+
+/// One value per element of a lane group.
+type Lanes = [f64; LANES];
 
 /// Two positions of one node computed from two elements agree when they are closer than
 /// this fraction of the element's size: the elements share the side's geometry.
@@ -96,7 +107,9 @@ impl UnstructuredSem {
         let global = number_points(&mesh, order)?;
         let nodes = global.iter().max().map_or(0, |&g| g + 1);
         let mut positions_m: Vec<Option<[f64; 2]>> = vec![None; nodes];
-        let mut metric = Vec::with_capacity(global.len());
+        let element_count = mesh.elements.len();
+        let groups = element_count.div_ceil(LANES);
+        let mut metric = vec![[[0.0; LANES]; 5]; groups * n * n];
         let mut lumped_mass = vec![0.0; 2 * nodes];
         for (e, quad) in mesh.elements.iter().enumerate() {
             let rho = materials[quad.material].density_kg_m3;
@@ -127,20 +140,24 @@ impl UnstructuredSem {
                     }
                     let [[x_xi, x_eta], [y_xi, y_eta]] = p.jacobian;
                     let w = gll.weights[i] * gll.weights[j] * det;
-                    metric.push([y_eta / det, -x_eta / det, -y_xi / det, x_xi / det, w]);
+                    let values = [y_eta / det, -x_eta / det, -y_xi / det, x_xi / det, w];
+                    let at = &mut metric[(e / LANES) * n * n + j * n + i];
+                    for (component, v) in at.iter_mut().zip(values) {
+                        component[e % LANES] = v;
+                    }
                     lumped_mass[2 * g] += rho * w;
                     lumped_mass[2 * g + 1] += rho * w;
                 }
             }
         }
-        let stiffness = mesh
-            .elements
-            .iter()
-            .map(|q| {
-                let c = materials[q.material].rotated(q.angle_rad).stiffness_pa;
-                [c[0][0], c[0][1], c[0][2], c[1][1], c[1][2], c[2][2]]
-            })
-            .collect();
+        let mut stiffness = vec![[[0.0; LANES]; 6]; groups];
+        for (e, q) in mesh.elements.iter().enumerate() {
+            let c = materials[q.material].rotated(q.angle_rad).stiffness_pa;
+            let values = [c[0][0], c[0][1], c[0][2], c[1][1], c[1][2], c[2][2]];
+            for (entry, v) in stiffness[e / LANES].iter_mut().zip(values) {
+                entry[e % LANES] = v;
+            }
+        }
         let (incidence_start, incidence) = incidence(&global, nodes);
         Ok(UnstructuredSem {
             order,
@@ -159,6 +176,7 @@ impl UnstructuredSem {
             global,
             metric,
             stiffness,
+            elements: element_count,
             incidence_start,
             incidence,
         })
@@ -171,7 +189,18 @@ impl UnstructuredSem {
 
     /// Number of elements.
     pub fn elements(&self) -> usize {
-        self.stiffness.len()
+        self.elements
+    }
+
+    /// Element `e`'s plane stiffness in x-y axes as (C11, C12, C13, C22, C23, C33) (Pa).
+    pub fn element_stiffness(&self, e: usize) -> [f64; 6] {
+        self.stiffness[e / LANES].map(|entry| entry[e % LANES])
+    }
+
+    /// w_i w_j det J at element `e`'s point q (m^2).
+    fn point_weight(&self, e: usize, q: usize) -> f64 {
+        let n = self.order + 1;
+        self.metric[(e / LANES) * n * n + q][4][e % LANES]
     }
 
     /// The global node of element `e`'s GLL point (i, j).
