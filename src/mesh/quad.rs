@@ -119,13 +119,27 @@ impl QuadMesh {
         [n[0], n[1], n[2], n[3]]
     }
 
-    /// Checks the mesh: every element has 4 or 9 nodes (all of one kind), its node indices
-    /// and material exist, its angle is finite, and its Jacobian has one sign at every point
-    /// of a `samples` x `samples` grid over the reference square (corners included). A
+    /// Checks the mesh: its nodes are finite, it has elements, every element has 4 or 9
+    /// nodes (all of one kind), its node indices and material exist, its angle is finite,
+    /// and its Jacobian has one sign at every point of a `samples` x `samples` grid over the reference square (corners included). A
     /// clockwise element (det J < 0 everywhere, as Gmsh writes surfaces whose normal points
     /// along -z) is renumbered counter-clockwise; a sign change or a zero is an error naming
     /// the element: inverted or degenerate.
     pub fn validate(&mut self, materials: usize, samples: usize) -> Result<()> {
+        if let Some((n, x)) = self
+            .nodes
+            .iter()
+            .enumerate()
+            .find(|(_, x)| !x.iter().all(|v| v.is_finite()))
+        {
+            return Err(Error::Mesh(format!(
+                "node {n} is at ({}, {}): not a finite position",
+                x[0], x[1]
+            )));
+        }
+        if self.elements.is_empty() {
+            return Err(Error::Mesh("the mesh has no elements".into()));
+        }
         let kind = self.elements.first().map_or(4, |q| q.nodes.len());
         for e in 0..self.elements.len() {
             let quad = &self.elements[e];
@@ -271,6 +285,10 @@ mod tests {
         let mut missing = square(unit(), vec![0, 1, 2, 9]);
         let e = missing.validate(1, 5).unwrap_err().to_string();
         assert!(e.contains("names node 9"), "{e}");
+        let mut far = square(unit(), vec![0, 1, 2, 3]);
+        far.nodes[2] = [f64::NAN, 1.0];
+        let e = far.validate(1, 5).unwrap_err().to_string();
+        assert!(e.contains("node 2 is at (NaN, 1)"), "{e}");
         let mut unknown = square(unit(), vec![0, 1, 2, 3]);
         unknown.elements[0].material = 3;
         let e = unknown.validate(1, 5).unwrap_err().to_string();

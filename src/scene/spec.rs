@@ -64,7 +64,7 @@ pub struct GmshSpec {
     pub order: Option<usize>,
     /// The angle of each physical surface group's material axes from x, counter-clockwise
     /// (degrees), keyed as `materials`; 0 where not given. Spectral elements only.
-    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    #[serde(default)]
     pub angles_deg: std::collections::BTreeMap<String, f64>,
     /// The file's bytes when the caller has read it (scripts read it inside their sandbox);
     /// `None` reads `path`.
