@@ -83,12 +83,16 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
     model.fixed_dofs = fixed;
     let sides: Vec<_> = absorbing.iter().map(|a| a.side).collect();
     model.dashpots = model.lysmer_dashpots(&sides);
+    // one spring per DOF, sorted (a corner shared by two viscous-spring edges sums both)
+    let mut springs = std::collections::BTreeMap::<usize, f64>::new();
     for edge in &absorbing {
         if let Some(r) = edge.spring_distance_m {
-            let springs = model.viscous_springs(edge.side, r)?;
-            model.springs.extend(springs);
+            for (d, k) in model.viscous_springs(edge.side, r)? {
+                *springs.entry(d).or_default() += k;
+            }
         }
     }
+    model.springs = springs.into_iter().collect();
     let stability = stability(&model);
     Ok(Scene {
         spec: spec.clone(),

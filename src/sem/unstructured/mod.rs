@@ -43,7 +43,7 @@ pub struct UnstructuredSem {
     /// (DOF, c) of dashpots (none unless set, see [`UnstructuredSem::lysmer_dashpots`]).
     pub dashpots: Vec<(usize, f64)>,
     /// (DOF, k) of the diagonal springs of viscous-spring edges (none unless set, see
-    /// [`UnstructuredSem::viscous_springs`]), added to K u.
+    /// [`UnstructuredSem::viscous_springs`]), added to K u; sorted by DOF, each DOF once.
     pub springs: Vec<(usize, f64)>,
     /// The mesh, its elements counter-clockwise.
     pub mesh: QuadMesh,
