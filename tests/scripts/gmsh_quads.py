@@ -4,7 +4,8 @@ package: python3 gmsh_quads.py):
 - gmsh_disk_q9.msh: a disk of radius 2 mm, unstructured 9-node (curved) quadrilaterals of
   about 0.5 mm, physical surface 1 (the torsional-mode check of the unstructured spectral
   elements, src/mesh/gmsh.rs);
-- gmsh_disk_q4.msh: the same disk with 4-node (straight-sided) quadrilaterals."""
+- gmsh_disk_q4.msh: the same disk with 4-node (straight-sided) quadrilaterals;
+- gmsh_quad_plate.msh and gmsh_quad_plate_unstructured.msh: a two-layer plate (below)."""
 import gmsh
 
 
@@ -66,3 +67,33 @@ def layered_plate():
 
 
 layered_plate()
+
+
+def unstructured_plate():
+    """gmsh_quad_plate_unstructured.msh: the same two-layer plate as unstructured 9-node
+    quadrilaterals of about 0.25 mm (0.5 mm elements each split into 4) (tests/scene_edges.rs runs the exact plane wave through
+    it)."""
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.add("quad_plate_unstructured")
+    occ = gmsh.model.occ
+    lower = occ.addRectangle(0, 0, 0, 4e-3, 1.2e-3)
+    upper = occ.addRectangle(0, 1.2e-3, 0, 4e-3, 0.8e-3)
+    occ.fragment([(2, lower), (2, upper)], [])
+    occ.synchronize()
+    gmsh.model.addPhysicalGroup(2, [lower], 1)
+    gmsh.model.addPhysicalGroup(2, [upper], 2)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5e-3)
+    gmsh.option.setNumber("Mesh.RecombineAll", 1)
+    # recombination alone leaves a few triangles here: split every element into quads
+    gmsh.option.setNumber("Mesh.SubdivisionAlgorithm", 1)
+    gmsh.option.setNumber("Mesh.Algorithm", 8)
+    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.model.mesh.generate(2)
+    gmsh.model.mesh.setOrder(2)
+    gmsh.write("gmsh_quad_plate_unstructured.msh")
+    gmsh.finalize()
+
+
+unstructured_plate()
