@@ -70,7 +70,7 @@ pub struct UnstructuredSem {
 
 /// Elements processed at once by the kernel, one per f64 SIMD lane of its array operations
 /// (8: two AVX2 registers, as the layered kernel's).
-pub(crate) const LANES: usize = 8;
+const LANES: usize = 8;
 
 /// One value per element of a lane group.
 type Lanes = [f64; LANES];
@@ -103,80 +103,25 @@ impl UnstructuredSem {
         let mut mesh = mesh.clone();
         mesh.validate(materials.len(), order + 2)?;
         let gll = Gll::new(order);
-        let n = order + 1;
         let global = number_points(&mesh, order)?;
         let nodes = global.iter().max().map_or(0, |&g| g + 1);
-        let mut positions_m: Vec<Option<[f64; 2]>> = vec![None; nodes];
-        let element_count = mesh.elements.len();
-        let groups = element_count.div_ceil(LANES);
-        let mut metric = vec![[[0.0; LANES]; 5]; groups * n * n];
-        let mut lumped_mass = vec![0.0; 2 * nodes];
-        for (e, quad) in mesh.elements.iter().enumerate() {
-            let rho = materials[quad.material].density_kg_m3;
-            let tolerance = SHARED_POINT_TOLERANCE * mesh.corner_span(e);
-            for j in 0..n {
-                for i in 0..n {
-                    let p = mesh.map(e, gll.points[i], gll.points[j]);
-                    let det = p.det();
-                    if det <= 0.0 {
-                        return Err(Error::Mesh(format!(
-                            "element {}: its Jacobian is {det:e} <= 0 at GLL point \
-                             ({i}, {j}) of order {order}: the element is too distorted",
-                            quad.tag
-                        )));
-                    }
-                    let g = global[(e * n + j) * n + i];
-                    match positions_m[g] {
-                        None => positions_m[g] = Some(p.x),
-                        Some(x) if (x[0] - p.x[0]).hypot(x[1] - p.x[1]) <= tolerance => {}
-                        Some(x) => {
-                            return Err(Error::Mesh(format!(
-                                "element {} puts a point of a side it shares at ({:e}, \
-                                 {:e}) m where its neighbour puts it at ({:e}, {:e}) m: \
-                                 the two elements must share the side's nodes",
-                                quad.tag, p.x[0], p.x[1], x[0], x[1]
-                            )))
-                        }
-                    }
-                    let [[x_xi, x_eta], [y_xi, y_eta]] = p.jacobian;
-                    let w = gll.weights[i] * gll.weights[j] * det;
-                    let values = [y_eta / det, -x_eta / det, -y_xi / det, x_xi / det, w];
-                    let at = &mut metric[(e / LANES) * n * n + j * n + i];
-                    for (component, v) in at.iter_mut().zip(values) {
-                        component[e % LANES] = v;
-                    }
-                    lumped_mass[2 * g] += rho * w;
-                    lumped_mass[2 * g + 1] += rho * w;
-                }
-            }
-        }
-        let mut stiffness = vec![[[0.0; LANES]; 6]; groups];
-        for (e, q) in mesh.elements.iter().enumerate() {
-            let c = materials[q.material].rotated(q.angle_rad).stiffness_pa;
-            let values = [c[0][0], c[0][1], c[0][2], c[1][1], c[1][2], c[2][2]];
-            for (entry, v) in stiffness[e / LANES].iter_mut().zip(values) {
-                entry[e % LANES] = v;
-            }
-        }
+        let mapped = map_points(&mesh, &materials, &gll, &global, nodes)?;
         let (incidence_start, incidence) = incidence(&global, nodes);
         Ok(UnstructuredSem {
             order,
-            positions_m: positions_m
-                .into_iter()
-                .map(|x| x.unwrap_or_default())
-                .collect(),
-            materials,
-            lumped_mass,
+            positions_m: mapped.positions_m,
+            lumped_mass: mapped.lumped_mass,
             fixed_dofs: Vec::new(),
             dashpots: Vec::new(),
             springs: Vec::new(),
-            mesh,
             derivative: gll.derivative.iter().flatten().copied().collect(),
             gll,
             global,
-            metric,
-            stiffness,
-            elements: element_count,
+            metric: mapped.metric,
+            stiffness: element_stiffness(&mesh, &materials),
+            elements: mesh.elements.len(),
+            mesh,
+            materials,
             incidence_start,
             incidence,
         })
@@ -217,6 +162,92 @@ impl UnstructuredSem {
             self.stiffness_times(x, y, &mut work.borrow_mut())
         })
     }
+}
+
+/// What the elements' maps give at their GLL points.
+struct Mapped {
+    positions_m: Vec<[f64; 2]>,
+    metric: Vec<[Lanes; 5]>,
+    lumped_mass: Vec<f64>,
+}
+
+/// Maps every element's GLL points: the global nodes' positions (two elements sharing a
+/// side must put its points at the same place), the metric (xi_x, xi_y, eta_x, eta_y from
+/// the inverse Jacobian, w_i w_j det J) and the GLL mass rho w_i w_j det J summed per node.
+/// det J <= 0 at a point is an error naming the element.
+fn map_points(
+    mesh: &QuadMesh,
+    materials: &[Material],
+    gll: &Gll,
+    global: &[usize],
+    nodes: usize,
+) -> Result<Mapped> {
+    let n = gll.points.len();
+    let order = n - 1;
+    let mut positions: Vec<Option<[f64; 2]>> = vec![None; nodes];
+    let mut metric = vec![[[0.0; LANES]; 5]; mesh.elements.len().div_ceil(LANES) * n * n];
+    let mut lumped_mass = vec![0.0; 2 * nodes];
+    for (e, quad) in mesh.elements.iter().enumerate() {
+        let rho = materials[quad.material].density_kg_m3;
+        let tolerance = SHARED_POINT_TOLERANCE * mesh.corner_span(e);
+        for j in 0..n {
+            for i in 0..n {
+                let p = mesh.map(e, gll.points[i], gll.points[j]);
+                let det = p.det();
+                if det <= 0.0 {
+                    return Err(Error::Mesh(format!(
+                        "element {}: its Jacobian is {det:e} <= 0 at GLL point ({i}, {j}) \
+                         of order {order}: the element is too distorted",
+                        quad.tag
+                    )));
+                }
+                let g = global[(e * n + j) * n + i];
+                match positions[g] {
+                    None => positions[g] = Some(p.x),
+                    Some(x) if (x[0] - p.x[0]).hypot(x[1] - p.x[1]) <= tolerance => {}
+                    Some(x) => {
+                        return Err(Error::Mesh(format!(
+                            "element {} puts a point of a side it shares at ({:e}, {:e}) m \
+                             where its neighbour puts it at ({:e}, {:e}) m: the two elements \
+                             must share the side's nodes",
+                            quad.tag, p.x[0], p.x[1], x[0], x[1]
+                        )))
+                    }
+                }
+                let [[x_xi, x_eta], [y_xi, y_eta]] = p.jacobian;
+                let w = gll.weights[i] * gll.weights[j] * det;
+                let values = [y_eta / det, -x_eta / det, -y_xi / det, x_xi / det, w];
+                let at = &mut metric[(e / LANES) * n * n + j * n + i];
+                for (component, v) in at.iter_mut().zip(values) {
+                    component[e % LANES] = v;
+                }
+                lumped_mass[2 * g] += rho * w;
+                lumped_mass[2 * g + 1] += rho * w;
+            }
+        }
+    }
+    Ok(Mapped {
+        positions_m: positions
+            .into_iter()
+            .map(|x| x.unwrap_or_default())
+            .collect(),
+        metric,
+        lumped_mass,
+    })
+}
+
+/// Each element's plane stiffness in x-y axes, its material turned by its angle
+/// ([`Material::rotated`]), lane-major as [`UnstructuredSem::stiffness`] holds it.
+fn element_stiffness(mesh: &QuadMesh, materials: &[Material]) -> Vec<[Lanes; 6]> {
+    let mut stiffness = vec![[[0.0; LANES]; 6]; mesh.elements.len().div_ceil(LANES)];
+    for (e, q) in mesh.elements.iter().enumerate() {
+        let c = materials[q.material].rotated(q.angle_rad).stiffness_pa;
+        let values = [c[0][0], c[0][1], c[0][2], c[1][1], c[1][2], c[2][2]];
+        for (entry, v) in stiffness[e / LANES].iter_mut().zip(values) {
+            entry[e % LANES] = v;
+        }
+    }
+    stiffness
 }
 
 /// The global node of every element point (see [`UnstructuredSem::global`]), numbered in
