@@ -558,6 +558,24 @@ fn off_node_receivers_converge_like_the_nodal_solution_in_two_dimensions() {
     }
 }
 
+/// The Gmsh plate at `path` with fabric in its lower group (1) and epoxy in its upper (2),
+/// on spectral elements of `order` when given, on its triangles otherwise.
+fn gmsh_stack(path: &std::path::Path, order: Option<usize>) -> GmshSpec {
+    GmshSpec {
+        path: path.to_string_lossy().into(),
+        materials: [("1", "fabric_0_90"), ("2", "epoxy")]
+            .iter()
+            .map(|&(k, m)| (k.to_string(), MaterialSpec::Preset(m.into())))
+            .collect(),
+        crack_line: None,
+        contact: None,
+        tied: false,
+        order,
+        angles_deg: Default::default(),
+        bytes: None,
+    }
+}
+
 #[test]
 fn a_gmsh_stack_carries_the_plane_wave_of_its_physical_groups() {
     // tests/scripts/gmsh_plate.msh: unstructured ~0.2 mm T3 elements, physical surface 1 =
@@ -570,19 +588,7 @@ fn a_gmsh_stack_carries_the_plane_wave_of_its_physical_groups() {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts/gmsh_plate.msh");
     let mut spec = spec(H0, EdgeCondition::Roller);
-    spec.gmsh = Some(GmshSpec {
-        path: path.to_string_lossy().into(),
-        materials: [("1", "fabric_0_90"), ("2", "epoxy")]
-            .iter()
-            .map(|&(k, m)| (k.to_string(), MaterialSpec::Preset(m.into())))
-            .collect(),
-        crack_line: None,
-        contact: None,
-        tied: false,
-        order: None,
-        angles_deg: Default::default(),
-        bytes: None,
-    });
+    spec.gmsh = Some(gmsh_stack(&path, None));
     let points = [(2.0e-3, 1.2e-3), (2.0e-3, 2.0e-3), (1.7e-3, 0.5e-3)];
     spec.receivers = ReceiverSpec {
         x_m: vec![],
@@ -632,19 +638,7 @@ fn a_gmsh_quadrilateral_stack_on_spectral_elements_carries_the_plane_wave() {
     };
     let errors = |order: usize| -> Vec<f64> {
         let mut spec = spec(H0, EdgeCondition::Roller);
-        spec.gmsh = Some(GmshSpec {
-            path: path.to_string_lossy().into(),
-            materials: [("1", "fabric_0_90"), ("2", "epoxy")]
-                .iter()
-                .map(|&(k, m)| (k.to_string(), MaterialSpec::Preset(m.into())))
-                .collect(),
-            crack_line: None,
-            contact: None,
-            tied: false,
-            order: Some(order),
-            angles_deg: Default::default(),
-            bytes: None,
-        });
+        spec.gmsh = Some(gmsh_stack(&path, Some(order)));
         spec.receivers = ReceiverSpec {
             x_m: vec![],
             at: at_points(&points),

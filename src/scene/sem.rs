@@ -14,7 +14,7 @@ use crate::fem::AbsorbingEdge;
 use crate::mesh::{Crack, Grid, Mesh, Side};
 use crate::sem::unstructured::UnstructuredSem;
 use crate::sem::{SemModel, SemSpec, MAX_ORDER};
-use crate::solve::{Quantity, Receiver, StabilityEstimate};
+use crate::solve::{Discretisation, Quantity, Receiver, StabilityEstimate};
 
 /// The scene on spectral elements cut as `cut` says (see
 /// [`super::DiscretisationSpec::Sem`]).
@@ -192,10 +192,10 @@ fn split(model: &mut SemModel, nodes: &mut Mesh, p: &CrackPlacement) -> Result<C
 
 /// dt_crit from the Lanczos estimate of the largest eigenvalue of M^-1 K over the free DOFs
 /// (springs included, dashpots not: they do not enter M^-1 K), and the element bound
-/// ([`SemModel::element_eigenvalue_bound`]).
-fn stability(model: &SemModel) -> StabilityEstimate {
-    let mut free = vec![true; model.dofs()];
-    for &d in &model.fixed_dofs {
+/// ([`SemModel::element_eigenvalue_bound`]); the layered model and the unstructured one alike.
+pub(super) fn stability<M: GllNodes>(model: &M) -> StabilityEstimate {
+    let mut free = vec![true; model.lumped_mass().len()];
+    for &d in model.fixed_dofs() {
         free[d] = false;
     }
     let (lambda, iterations) = model.max_eigenvalue(&free);
@@ -216,14 +216,18 @@ pub(super) struct OnSem<'a, M> {
     pub(super) nodes: &'a Mesh,
 }
 
-/// What loads and receivers need of spectral elements.
-pub(super) trait GllNodes {
+/// What loads, receivers and the step estimate need of spectral elements.
+pub(super) trait GllNodes: Discretisation {
     /// Per node, the integral of its GLL Lagrange polynomial over the part from..to of
     /// `side` (along x on the top and bottom, y on the left and right); empty when the part
     /// covers no element side.
     fn side_load(&self, side: Side, from: f64, to: f64) -> Vec<(usize, f64)>;
     /// The interpolation weights of the point (x, y), `None` outside every element.
     fn point_weights(&self, x: f64, y: f64) -> Option<Vec<(usize, f64)>>;
+    /// omega_max^2 of M^-1 K over the `free` DOFs (Lanczos), with the iterations taken.
+    fn max_eigenvalue(&self, free: &[bool]) -> (f64, usize);
+    /// An upper bound of omega_max^2 from the elements (Gershgorin).
+    fn element_eigenvalue_bound(&self) -> f64;
 }
 
 impl GllNodes for SemModel {
@@ -233,6 +237,12 @@ impl GllNodes for SemModel {
     fn point_weights(&self, x: f64, y: f64) -> Option<Vec<(usize, f64)>> {
         SemModel::point_weights(self, x, y)
     }
+    fn max_eigenvalue(&self, free: &[bool]) -> (f64, usize) {
+        SemModel::max_eigenvalue(self, free)
+    }
+    fn element_eigenvalue_bound(&self) -> f64 {
+        SemModel::element_eigenvalue_bound(self)
+    }
 }
 
 impl GllNodes for UnstructuredSem {
@@ -241,6 +251,12 @@ impl GllNodes for UnstructuredSem {
     }
     fn point_weights(&self, x: f64, y: f64) -> Option<Vec<(usize, f64)>> {
         UnstructuredSem::point_weights(self, x, y)
+    }
+    fn max_eigenvalue(&self, free: &[bool]) -> (f64, usize) {
+        UnstructuredSem::max_eigenvalue(self, free)
+    }
+    fn element_eigenvalue_bound(&self) -> f64 {
+        UnstructuredSem::element_eigenvalue_bound(self)
     }
 }
 

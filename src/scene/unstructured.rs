@@ -6,7 +6,7 @@
 
 use super::build::{gmsh_bytes, gmsh_materials, group_tag, Region, BYTES_PER_NODE};
 use super::edges::{absorbing_edges, edge_conditions, held_and_pinned_dofs, is_periodic};
-use super::sem::OnSem;
+use super::sem::{stability, OnSem};
 use super::sources::{source_weights, transmitter_weights};
 use super::spec::{GmshSpec, SceneSpec};
 use super::{Body, Scene};
@@ -14,7 +14,6 @@ use crate::error::{Error, Result};
 use crate::laminate::Laminate;
 use crate::mesh::Mesh;
 use crate::sem::unstructured::UnstructuredSem;
-use crate::solve::StabilityEstimate;
 use std::collections::HashMap;
 
 /// The scene on spectral elements of `order` over `g`'s quadrilaterals.
@@ -166,20 +165,5 @@ fn node_triangles(model: &UnstructuredSem) -> Mesh {
         element_material,
         interfaces_y_m: Vec::new(),
         grid: None,
-    }
-}
-
-/// dt_crit from the Lanczos estimate over the free DOFs (springs included), and the element
-/// bound ([`UnstructuredSem::element_eigenvalue_bound`]).
-fn stability(model: &UnstructuredSem) -> StabilityEstimate {
-    let mut free = vec![true; model.dofs()];
-    for &d in &model.fixed_dofs {
-        free[d] = false;
-    }
-    let (lambda, iterations) = model.max_eigenvalue(&free);
-    StabilityEstimate {
-        dt_crit_s: 2.0 / lambda.sqrt(),
-        dt_element_bound_s: 2.0 / model.element_eigenvalue_bound().sqrt(),
-        iterations,
     }
 }
