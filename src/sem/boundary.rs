@@ -6,6 +6,7 @@ use super::SemModel;
 use crate::error::{Error, Result};
 use crate::fem::{VISCOUS_SPRING_ALPHA_N, VISCOUS_SPRING_ALPHA_T};
 use crate::mesh::Side;
+use std::collections::BTreeMap;
 
 impl SemModel {
     /// GLL quadrature of a side: for every element edge on it, each of its nodes with the
@@ -77,62 +78,91 @@ impl SemModel {
         Some(weights)
     }
 
-    /// Lysmer-Kuhlemeyer dashpots of the `sides` (report Sec. 4.6), with GLL
-    /// edge weights: per edge node, rho V_p times its weight on the normal DOF and rho V_s on
-    /// the tangential one, V_p along the side's normal, from the material of the element it
-    /// belongs to (a node shared by two element rows gets both halves). Sorted by DOF.
+    /// Lysmer-Kuhlemeyer dashpots of the `sides` (report Sec. 4.6) with GLL edge weights,
+    /// as [`side_dashpots`] gives them, from the material of the element row each node's
+    /// weight comes from (a node shared by two element rows gets both halves). Sorted by DOF.
     pub fn lysmer_dashpots(&self, sides: &[Side]) -> Vec<(usize, f64)> {
-        let mut c = std::collections::BTreeMap::<usize, f64>::new();
+        let mut c = BTreeMap::new();
         for &side in sides {
-            let normal = match side {
-                Side::Bottom | Side::Top => 1,
-                Side::Left | Side::Right => 0,
-            };
-            for (node, weight, row) in self.side_quadrature(side) {
-                let mat = &self.materials[self.row_material[row]];
-                let speeds = mat.wave_speeds();
-                let vp = if normal == 0 {
-                    speeds.p_x_m_s
-                } else {
-                    speeds.p_y_m_s
-                };
-                let rho = mat.density_kg_m3;
-                *c.entry(2 * node + normal).or_default() += rho * vp * weight;
-                *c.entry(2 * node + 1 - normal).or_default() += rho * speeds.s_m_s * weight;
-            }
+            side_dashpots(&mut c, &self.side_points(side));
         }
         c.into_iter().collect()
     }
 
     /// The springs of a viscous-spring edge on `side` (Liu et al. 2006, as T3's
-    /// [`crate::fem::AbsorbingEdge`]), with GLL edge weights: per edge node,
-    /// k_N = ALPHA_N G w / R on the normal DOF and k_T = ALPHA_T G w / R on the tangential one,
-    /// G = rho V_s^2 of the element the node's weight w comes from, R = `distance_m` from the
-    /// wave source (a node shared by two element rows gets both halves). Sorted by DOF; add
-    /// them to [`SemModel::springs`] (several sides: extend).
+    /// [`crate::fem::AbsorbingEdge`]), with GLL edge weights, as [`side_springs`] gives
+    /// them; R = `distance_m` from the wave source (a node shared by two element rows gets
+    /// both halves). Sorted by DOF; add them to [`SemModel::springs`] (several sides: extend).
     pub fn viscous_springs(&self, side: Side, distance_m: f64) -> Result<Vec<(usize, f64)>> {
-        if !(distance_m.is_finite() && distance_m > 0.0) {
-            return Err(Error::invalid(
-                "absorber.source_distance_m",
-                distance_m,
-                "must be a positive distance (m)",
-            ));
-        }
+        side_springs(&self.side_points(side), distance_m)
+    }
+
+    /// The GLL points of `side` with their element row's density and moduli.
+    fn side_points(&self, side: Side) -> Vec<SidePoint> {
         let normal = match side {
             Side::Bottom | Side::Top => 1,
             Side::Left | Side::Right => 0,
         };
-        let mut k = std::collections::BTreeMap::<usize, f64>::new();
-        for (node, weight, row) in self.side_quadrature(side) {
-            let mat = &self.materials[self.row_material[row]];
-            let g = mat.density_kg_m3 * mat.wave_speeds().s_m_s.powi(2);
-            *k.entry(2 * node + normal).or_default() +=
-                VISCOUS_SPRING_ALPHA_N * g * weight / distance_m;
-            *k.entry(2 * node + 1 - normal).or_default() +=
-                VISCOUS_SPRING_ALPHA_T * g * weight / distance_m;
-        }
-        Ok(k.into_iter().collect())
+        self.side_quadrature(side)
+            .into_iter()
+            .map(|(node, weight, row)| {
+                let mat = &self.materials[self.row_material[row]];
+                let c = &mat.stiffness_pa;
+                SidePoint {
+                    node,
+                    normal,
+                    weight,
+                    density_kg_m3: mat.density_kg_m3,
+                    c_normal_pa: c[normal][normal],
+                    c_shear_pa: c[2][2],
+                }
+            })
+            .collect()
     }
+}
+
+/// A GLL point on a straight side along x or y: its node, the DOF component normal to the
+/// side, its edge weight w (m), and the density and the normal (C_11 or C_22) and shear
+/// (C_33) moduli of the element its weight comes from.
+pub(crate) struct SidePoint {
+    pub node: usize,
+    pub normal: usize,
+    pub weight: f64,
+    pub density_kg_m3: f64,
+    pub c_normal_pa: f64,
+    pub c_shear_pa: f64,
+}
+
+/// Adds the Lysmer-Kuhlemeyer dashpots of `points` to `c` (per DOF): rho V_n w on the
+/// normal DOF and rho V_s w on the tangential one, rho V = sqrt(rho C) with V_n =
+/// sqrt(C_nn / rho), V_s = sqrt(C_33 / rho) (report Sec. 4.6; the impedances of waves
+/// crossing the side at normal incidence).
+pub(crate) fn side_dashpots(c: &mut BTreeMap<usize, f64>, points: &[SidePoint]) {
+    for p in points {
+        let (n, t) = (2 * p.node + p.normal, 2 * p.node + 1 - p.normal);
+        *c.entry(n).or_default() += (p.density_kg_m3 * p.c_normal_pa).sqrt() * p.weight;
+        *c.entry(t).or_default() += (p.density_kg_m3 * p.c_shear_pa).sqrt() * p.weight;
+    }
+}
+
+/// The springs of a viscous-spring edge through `points` (Liu et al. 2006): per DOF,
+/// k_N = ALPHA_N G w / R on the normal one and k_T = ALPHA_T G w / R on the tangential one,
+/// G = C_33, R = `distance_m` from the wave source. Sorted by DOF; R must be positive.
+pub(crate) fn side_springs(points: &[SidePoint], distance_m: f64) -> Result<Vec<(usize, f64)>> {
+    if !(distance_m.is_finite() && distance_m > 0.0) {
+        return Err(Error::invalid(
+            "absorber.source_distance_m",
+            distance_m,
+            "must be a positive distance (m)",
+        ));
+    }
+    let mut k = BTreeMap::<usize, f64>::new();
+    for p in points {
+        let g = p.c_shear_pa * p.weight / distance_m;
+        *k.entry(2 * p.node + p.normal).or_default() += VISCOUS_SPRING_ALPHA_N * g;
+        *k.entry(2 * p.node + 1 - p.normal).or_default() += VISCOUS_SPRING_ALPHA_T * g;
+    }
+    Ok(k.into_iter().collect())
 }
 
 /// Index of the interval of ascending `lines` holding `v` (the lower one on a shared line),

@@ -18,7 +18,7 @@
 //! the originals. Viscous springs ([`SemModel::viscous_springs`]) add a diagonal stiffness.
 
 mod assembled;
-mod boundary;
+pub(crate) mod boundary;
 mod crack;
 mod discretisation;
 mod even_odd;

@@ -3,8 +3,8 @@
 //! quadrature), and the interpolation of a point inside any element.
 
 use super::{side_point, UnstructuredSem};
-use crate::error::{Error, Result};
-use crate::fem::{VISCOUS_SPRING_ALPHA_N, VISCOUS_SPRING_ALPHA_T};
+use crate::error::Result;
+use crate::sem::boundary::{side_dashpots, side_springs, SidePoint};
 use crate::mesh::Side;
 use crate::sem::gll::Gll;
 use std::collections::BTreeMap;
@@ -197,46 +197,40 @@ impl UnstructuredSem {
     }
 
     /// Lysmer-Kuhlemeyer dashpots of the `sides` with GLL edge weights, as the layered
-    /// model's ([`crate::sem::SemModel::lysmer_dashpots`]): per edge node, rho V_p times its
-    /// weight on the normal DOF and rho V_s on the tangential one, V_p = sqrt(C_nn / rho) and
-    /// V_s = sqrt(C_33 / rho) of the element's stiffness in x-y axes. Sorted by DOF.
+    /// model's ([`crate::sem::SemModel::lysmer_dashpots`]), from the element's stiffness in
+    /// x-y axes. Sorted by DOF.
     pub fn lysmer_dashpots(&self, sides: &[Side]) -> Vec<(usize, f64)> {
-        let mut c = BTreeMap::<usize, f64>::new();
+        let mut c = BTreeMap::new();
         for &side in sides {
-            let normal = self.edge_line(side).0;
-            for (node, weight, e) in self.side_quadrature(side) {
-                let rho = self.materials[self.mesh.elements[e].material].density_kg_m3;
-                let k = self.element_stiffness(e);
-                let c_nn = if normal == 0 { k[0] } else { k[3] };
-                *c.entry(2 * node + normal).or_default() += (rho * c_nn).sqrt() * weight;
-                *c.entry(2 * node + 1 - normal).or_default() += (rho * k[5]).sqrt() * weight;
-            }
+            side_dashpots(&mut c, &self.side_points(side));
         }
         c.into_iter().collect()
     }
 
     /// The springs of a viscous-spring edge on `side` (Liu et al. 2006), as the layered
-    /// model's ([`crate::sem::SemModel::viscous_springs`]): k_N = ALPHA_N G w / R on the
-    /// normal DOF and k_T = ALPHA_T G w / R on the tangential one, G = C_33 of the element,
+    /// model's ([`crate::sem::SemModel::viscous_springs`]), G = C_33 of the element,
     /// R = `distance_m`. Sorted by DOF.
     pub fn viscous_springs(&self, side: Side, distance_m: f64) -> Result<Vec<(usize, f64)>> {
-        if !(distance_m.is_finite() && distance_m > 0.0) {
-            return Err(Error::invalid(
-                "absorber.source_distance_m",
-                distance_m,
-                "must be a positive distance (m)",
-            ));
-        }
+        side_springs(&self.side_points(side), distance_m)
+    }
+
+    /// The GLL points of `side` with their element's density and moduli in x-y axes.
+    fn side_points(&self, side: Side) -> Vec<SidePoint> {
         let normal = self.edge_line(side).0;
-        let mut k = BTreeMap::<usize, f64>::new();
-        for (node, weight, e) in self.side_quadrature(side) {
-            let g = self.element_stiffness(e)[5];
-            *k.entry(2 * node + normal).or_default() +=
-                VISCOUS_SPRING_ALPHA_N * g * weight / distance_m;
-            *k.entry(2 * node + 1 - normal).or_default() +=
-                VISCOUS_SPRING_ALPHA_T * g * weight / distance_m;
-        }
-        Ok(k.into_iter().collect())
+        self.side_quadrature(side)
+            .into_iter()
+            .map(|(node, weight, e)| {
+                let k = self.element_stiffness(e);
+                SidePoint {
+                    node,
+                    normal,
+                    weight,
+                    density_kg_m3: self.materials[self.mesh.elements[e].material].density_kg_m3,
+                    c_normal_pa: if normal == 0 { k[0] } else { k[3] },
+                    c_shear_pa: k[5],
+                }
+            })
+            .collect()
     }
 }
 
