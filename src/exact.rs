@@ -1,5 +1,6 @@
 //! Exact solutions of plane orthotropic elastodynamics, against which discretisations are
-//! checked (the spectral-element tests, `examples/sem_vs_t3` and `tests/normal_incidence.rs`).
+//! checked (the spectral-element tests, `examples/sem_vs_t3`, `tests/normal_incidence.rs` and
+//! `tests/hole_scattering.rs`).
 
 use crate::error::{require_positive, Error, Result};
 use crate::laminate::Laminate;
@@ -7,6 +8,7 @@ use crate::material::Material;
 use crate::signal::{causal_response, Signal};
 use rustfft::num_complex::Complex64;
 
+pub mod hole;
 pub mod oblique;
 
 /// A standing mode of an orthotropic box with rollers on every edge (u_n = 0, no shear

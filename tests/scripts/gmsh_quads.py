@@ -97,3 +97,48 @@ def unstructured_plate():
 
 
 unstructured_plate()
+
+
+def hole_plate():
+    """gmsh_hole.msh: a 36 mm x 36 mm square of one material (physical surface 1) with a
+    circular hole of radius 1 mm at its centre, 9-node quadrilaterals (curved on the hole)
+    from about 0.4 mm on the hole to 1.2 mm from 8 mm away (tests/hole_scattering.rs
+    scatters a plane P wave off the hole and compares with the exact series)."""
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.add("hole_plate")
+    occ = gmsh.model.occ
+    square = occ.addRectangle(0, 0, 0, 36e-3, 36e-3)
+    hole = occ.addDisk(18e-3, 18e-3, 0, 1e-3, 1e-3)
+    occ.cut([(2, square)], [(2, hole)])
+    occ.synchronize()
+    (_, surface), = gmsh.model.getEntities(2)
+    gmsh.model.addPhysicalGroup(2, [surface], 1)
+    circle = [c for _, c in gmsh.model.getEntities(1)
+              if gmsh.model.getBoundingBox(1, c)[3] - gmsh.model.getBoundingBox(1, c)[0] < 3e-3]
+    field = gmsh.model.mesh.field
+    distance = field.add("Distance")
+    field.setNumbers(distance, "CurvesList", circle)
+    threshold = field.add("Threshold")
+    field.setNumber(threshold, "InField", distance)
+    field.setNumber(threshold, "SizeMin", 0.4e-3)
+    field.setNumber(threshold, "SizeMax", 1.2e-3)
+    field.setNumber(threshold, "DistMin", 0.0)
+    field.setNumber(threshold, "DistMax", 8e-3)
+    field.setAsBackgroundMesh(threshold)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+    gmsh.option.setNumber("Mesh.RecombineAll", 1)
+    gmsh.option.setNumber("Mesh.Algorithm", 8)
+    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.model.mesh.generate(2)
+    gmsh.model.mesh.setOrder(2)
+    types, tags, _ = gmsh.model.mesh.getElements(2)
+    print("hole plate:", {gmsh.model.mesh.getElementProperties(t)[0]: len(k) for t, k in zip(types, tags)})
+    gmsh.write("gmsh_hole.msh")
+    gmsh.finalize()
+
+
+hole_plate()

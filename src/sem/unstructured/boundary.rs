@@ -4,8 +4,8 @@
 
 use super::{side_point, UnstructuredSem};
 use crate::error::Result;
-use crate::sem::boundary::{side_dashpots, side_springs, SidePoint};
 use crate::mesh::Side;
+use crate::sem::boundary::{side_dashpots, side_springs, SidePoint};
 use crate::sem::gll::Gll;
 use std::collections::BTreeMap;
 
