@@ -1,17 +1,21 @@
-//! Node-to-node contact with Coulomb friction on a horizontal crack (report Sec. 4.9,
-//! Table 3 corrected: docs/src/physics.md).
+//! Node-to-node contact with Coulomb friction on a crack (report Sec. 4.9, Table 3 corrected:
+//! docs/src/physics.md), each pair in its own frame: the unit normal n of the crack at the
+//! pair, pointing from the slave's face into the master's side ((0, 1) on a horizontal crack,
+//! the slave below), and the tangent t = (n_y, -n_x).
 //!
 //! With lumped mass the explicit predictor u* moves each crack DOF independently, and a
 //! contact force lambda changes the next displacement by D lambda with D = dt^2 / m (divided
-//! by 1 + c dt / 2m on a damped DOF). So every pair is a scalar problem per direction and
-//! the correction costs O(pairs) per step:
-//! - normal gap g_N = u_y(slave) - u_y(master) (> 0 is penetration), lambda_N >= 0 (eq 70);
+//! by 1 + c dt / 2m on a damped DOF). Where D is the same along x and y (or the crack is
+//! horizontal or vertical) the normal and tangential directions do not couple, so every pair
+//! is a scalar problem per direction and the correction costs O(pairs) per step:
+//! - normal gap g_N = n . (u(slave) - u(master)) (> 0 is penetration), lambda_N >= 0
+//!   (eq 70), pushing the master along n and the slave against it;
 //! - exact forward-increment multiplier (Carpenter, Taylor, Katona 1991):
 //!   lambda_N = g_N / (D_m + D_s), closing the gap in one pass;
 //! - augmented Lagrangian: lambda_N <- max(0, lambda_N + b g_N) until the penetration norm
 //!   is below epsilon; the residual shrinks by |1 - b (D_m + D_s)| per iteration, so it
 //!   converges in one step for b = 1/(D_m + D_s) and diverges for b > 2/(D_m + D_s);
-//! - friction: tangential gap g_T = u_x(slave) - u_x(master), stick point g_T^s, trial
+//! - friction: tangential gap g_T = t . (u(slave) - u(master)), stick point g_T^s, trial
 //!   lambda_T' = (g_T - g_T^s)/(D_m + D_s); stick if |lambda_T'| <= s, the frictional
 //!   strength, else slip with lambda_T = sgn(g_T - g_T^s) s and the stick point moved;
 //! - strength s = mu lambda_N (Coulomb, the report's law) or, with a response time tau,
@@ -24,7 +28,7 @@
 //!   the crack removes it (docs/src/validation/spectral-elements.md, "Friction at high order").
 
 use crate::error::{Error, Result};
-use crate::mesh::Crack;
+use crate::mesh::{Crack, CrackPair};
 use crate::signal::Signal;
 use serde::{Deserialize, Serialize};
 
@@ -185,7 +189,7 @@ impl Counts {
     }
 }
 
-/// The DOFs and compliances of one pair.
+/// The DOFs, frame and compliances of one pair.
 #[derive(Clone, Copy, Debug)]
 struct PairDofs {
     master: [usize; 2],
@@ -193,6 +197,64 @@ struct PairDofs {
     /// D = dt^2/m (effective) for master x, y and slave x, y.
     d_master: [f64; 2],
     d_slave: [f64; 2],
+    /// The unit normal n and the tangent t = (n_y, -n_x).
+    normal: [f64; 2],
+    tangent: [f64; 2],
+    /// The compliance of the gap along n and along t: sum_c v_c^2 (D_slave,c + D_master,c).
+    d_normal: f64,
+    d_tangent: f64,
+}
+
+impl PairDofs {
+    /// The pair of `pair` with the per-DOF compliance `compliance`; an error where the
+    /// crack is inclined at the pair and a face's D differs along x and y (a fixed or damped
+    /// DOF), which would couple the normal and tangential problems.
+    fn new(pair: &CrackPair, compliance: &[f64]) -> Result<PairDofs> {
+        let (master, slave) = (
+            [2 * pair.master, 2 * pair.master + 1],
+            [2 * pair.slave, 2 * pair.slave + 1],
+        );
+        let (d_master, d_slave) = (master.map(|d| compliance[d]), slave.map(|d| compliance[d]));
+        let normal = pair.normal;
+        let tangent = [normal[1], -normal[0]];
+        let inclined = normal[0] != 0.0 && normal[1] != 0.0;
+        if inclined && (d_master[0] != d_master[1] || d_slave[0] != d_slave[1]) {
+            return Err(Error::Contact(format!(
+                "the crack pair of nodes {} and {} is inclined (normal ({:.3}, {:.3})) on a \
+                 fixed or absorbing edge, where its DOFs move differently along x and y: end \
+                 an inclined crack inside the body or on a free edge",
+                pair.master, pair.slave, normal[0], normal[1]
+            )));
+        }
+        let along = |v: [f64; 2]| {
+            v[0] * v[0] * (d_slave[0] + d_master[0]) + v[1] * v[1] * (d_slave[1] + d_master[1])
+        };
+        Ok(PairDofs {
+            master,
+            slave,
+            d_master,
+            d_slave,
+            normal,
+            tangent,
+            d_normal: along(normal),
+            d_tangent: along(tangent),
+        })
+    }
+
+    /// v . (u(slave) - u(master)).
+    fn gap(&self, v: [f64; 2], u: &[f64]) -> f64 {
+        v[0] * (u[self.slave[0]] - u[self.master[0]])
+            + v[1] * (u[self.slave[1]] - u[self.master[1]])
+    }
+
+    /// Applies the force lambda v to the master and -lambda v to the slave: u changes by
+    /// D f per DOF.
+    fn push(&self, v: [f64; 2], lambda: f64, u: &mut [f64]) {
+        for c in 0..2 {
+            u[self.slave[c]] -= self.d_slave[c] * (lambda * v[c]);
+            u[self.master[c]] += self.d_master[c] * (lambda * v[c]);
+        }
+    }
 }
 
 /// Contact forces of the last step, for the energy ledger.
@@ -231,22 +293,11 @@ impl ContactSolver {
     ) -> Result<ContactSolver> {
         options.validate()?;
         let lag = options.normal_stress_lag_s;
-        let pairs: Vec<PairDofs> = crack
+        let pairs = crack
             .pairs
             .iter()
-            .map(|p| {
-                let (m, s) = (
-                    [2 * p.master, 2 * p.master + 1],
-                    [2 * p.slave, 2 * p.slave + 1],
-                );
-                PairDofs {
-                    master: m,
-                    slave: s,
-                    d_master: m.map(|d| compliance[d]),
-                    d_slave: s.map(|d| compliance[d]),
-                }
-            })
-            .collect();
+            .map(|p| PairDofs::new(p, compliance))
+            .collect::<Result<Vec<_>>>()?;
         let n = pairs.len();
         let report = ContactReport {
             method: format!("{:?}", options.method),
@@ -270,7 +321,7 @@ impl ContactSolver {
     /// Sets the stick points to the current tangential gaps (start of a run).
     pub fn reset_stick_points(&mut self, u: &[f64]) {
         for (p, s) in self.pairs.iter().zip(&mut self.stick_gap) {
-            *s = u[p.slave[0]] - u[p.master[0]];
+            *s = p.gap(p.tangent, u);
         }
     }
 
@@ -285,18 +336,17 @@ impl ContactSolver {
         for (k, p) in self.pairs.iter().enumerate() {
             let lambda_n = self.force[k].normal;
             self.strength[k] = memory * self.strength[k] + (1.0 - memory) * mu * lambda_n;
-            u_next[p.slave[1]] -= p.d_slave[1] * lambda_n;
-            u_next[p.master[1]] += p.d_master[1] * lambda_n;
-            let residual = u_next[p.slave[1]] - u_next[p.master[1]];
+            p.push(p.normal, lambda_n, u_next);
+            let residual = p.gap(p.normal, u_next);
             self.report.max_penetration_m = self.report.max_penetration_m.max(residual);
-            let g_t = u_next[p.slave[0]] - u_next[p.master[0]];
+            let g_t = p.gap(p.tangent, u_next);
             if lambda_n <= 0.0 {
                 self.stick_gap[k] = g_t;
                 self.force[k].tangential = 0.0;
                 continue;
             }
             contact += 1;
-            let d_t = p.d_slave[0] + p.d_master[0];
+            let d_t = p.d_tangent;
             if d_t <= 0.0 {
                 // both tangential DOFs are fixed: nothing can slip
                 stick += 1;
@@ -312,9 +362,8 @@ impl ContactSolver {
                 slip += 1;
                 trial.signum() * strength
             };
-            u_next[p.slave[0]] -= p.d_slave[0] * lambda_t;
-            u_next[p.master[0]] += p.d_master[0] * lambda_t;
-            self.stick_gap[k] = u_next[p.slave[0]] - u_next[p.master[0]];
+            p.push(p.tangent, lambda_t, u_next);
+            self.stick_gap[k] = p.gap(p.tangent, u_next);
             self.force[k].tangential = lambda_t;
         }
         self.counts.in_contact.push(contact);
@@ -326,13 +375,13 @@ impl ContactSolver {
     /// Normal multipliers for the predictor; returns the iterations used.
     fn normal_forces(&mut self, u_next: &[f64]) -> Result<usize> {
         for (k, p) in self.pairs.iter().enumerate() {
-            self.gap[k] = u_next[p.slave[1]] - u_next[p.master[1]];
+            self.gap[k] = p.gap(p.normal, u_next);
         }
         match self.options.method {
             ContactMethod::Exact => {
                 let mut touching = 0;
                 for (k, p) in self.pairs.iter().enumerate() {
-                    let d = p.d_slave[1] + p.d_master[1];
+                    let d = p.d_normal;
                     let lambda = if d > 0.0 {
                         (self.gap[k] / d).max(0.0)
                     } else {
@@ -370,7 +419,7 @@ impl ContactSolver {
                 return Ok(it - 1);
             }
             for (k, p) in self.pairs.iter().enumerate() {
-                let d = p.d_slave[1] + p.d_master[1];
+                let d = p.d_normal;
                 let residual_gap = self.gap[k] - d * self.force[k].normal;
                 self.force[k].normal = (self.force[k].normal + scale / d * residual_gap).max(0.0);
             }
@@ -394,7 +443,7 @@ impl ContactSolver {
             .zip(&self.force)
             .zip(&self.gap)
             .map(|((p, f), g)| {
-                let r = g - (p.d_slave[1] + p.d_master[1]) * f.normal;
+                let r = g - p.d_normal * f.normal;
                 if f.normal > 0.0 {
                     r * r
                 } else {
@@ -406,8 +455,7 @@ impl ContactSolver {
     }
 
     fn divergence(&self, scale: f64) -> Error {
-        let p = &self.pairs[0];
-        let d = p.d_slave[1] + p.d_master[1];
+        let d = self.pairs[0].d_normal;
         Error::Contact(format!(
             "augmented-Lagrangian iteration diverges: penalty b = {:.4e} N/m is above the stable bound 2/(D_master + D_slave) = {:.4e} N/m (optimum 1/(D_master + D_slave) = {:.4e} N/m); lower penalty_scale from {scale} to at most 1, or use the exact multiplier",
             scale / d,
@@ -419,10 +467,11 @@ impl ContactSolver {
     /// Contact forces on the four DOFs of each pair: (dof, force) for the ledger.
     pub(crate) fn for_each_force(&self, mut f: impl FnMut(usize, f64)) {
         for (p, force) in self.pairs.iter().zip(&self.force) {
-            f(p.slave[1], -force.normal);
-            f(p.master[1], force.normal);
-            f(p.slave[0], -force.tangential);
-            f(p.master[0], force.tangential);
+            for c in [1, 0] {
+                let along = force.normal * p.normal[c] + force.tangential * p.tangent[c];
+                f(p.slave[c], -along);
+                f(p.master[c], along);
+            }
         }
     }
 

@@ -192,7 +192,7 @@ fn snapshot_titled(
         .collect();
     if let Some(c) = scene.crack() {
         overlays.push(Overlay {
-            points: vec![(c.x0_m, c.y_m), (c.x1_m, c.y_m)],
+            points: c.tips_m.iter().map(|t| (t[0], t[1])).collect(),
             color: (0, 0, 0),
             width: 3,
         });

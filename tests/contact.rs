@@ -6,7 +6,7 @@ use common::*;
 use trnews::contact::{ContactMethod, ContactOptions};
 use trnews::fem::{BlockCsr, Model};
 use trnews::laminate::Laminate;
-use trnews::mesh::{Crack, CrackPair, Mesh, Side};
+use trnews::mesh::{Crack, CrackPair, Mesh, Side, UP};
 use trnews::signal::Signal;
 use trnews::solve::{run, traction_source, Quantity, Receiver, RunConfig, RunOutput};
 
@@ -43,12 +43,11 @@ fn bilinear_model(m: f64, k1: f64, k2: f64, eps: f64) -> Model {
         dashpots: vec![(3, c_slave)],
         fixed_dofs: vec![0, 2],
         crack: Some(Crack {
-            y_m: 0.0,
-            x0_m: -1.0,
-            x1_m: 1.0,
+            tips_m: [[-1.0, 0.0], [1.0, 0.0]],
             pairs: vec![CrackPair {
                 master: 0,
                 slave: 1,
+                normal: UP,
             }],
         }),
         periodic: vec![],
@@ -117,12 +116,11 @@ fn two_bars(length: f64) -> (Model, Vec<usize>, Vec<usize>) {
         .map(|&s| CrackPair {
             master: s + n,
             slave: s,
+            normal: UP,
         })
         .collect();
     let crack = Crack {
-        y_m: length,
-        x0_m: 0.0,
-        x1_m: 4.0 * h,
+        tips_m: [[0.0, length], [4.0 * h, length]],
         pairs,
     };
     let fixed: Vec<usize> = mesh
@@ -289,6 +287,7 @@ fn push_block(p_n: f64, p_t: f64, friction: f64) -> (RunOutput, f64) {
         .map(|(&m, &s)| CrackPair {
             master: m,
             slave: s + n,
+            normal: UP,
         })
         .collect();
     let fixed = (2 * n..mesh.dofs()).collect();
@@ -298,9 +297,7 @@ fn push_block(p_n: f64, p_t: f64, friction: f64) -> (RunOutput, f64) {
         &[],
         fixed,
         Some(Crack {
-            y_m: 0.0,
-            x0_m: 0.0,
-            x1_m: w,
+            tips_m: [[0.0, 0.0], [w, 0.0]],
             pairs,
         }),
     )

@@ -90,25 +90,28 @@ pub struct Mesh {
     pub grid: Option<Grid>,
 }
 
-/// One crack node pair: `master` on the upper face, `slave` on the lower face.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+/// The normal of a horizontal crack's pairs: the master's face above the slave's.
+pub const UP: [f64; 2] = [0.0, 1.0];
+
+/// One crack node pair: `master` on the upper face, `slave` on the lower face (of a
+/// horizontal crack; on any other, the faces `normal` points into and out of).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct CrackPair {
     /// Upper-face node (keeps the original index).
     pub master: usize,
     /// Lower-face node (the duplicate).
     pub slave: usize,
+    /// The crack's unit normal at the pair, from the slave's face into the master's side:
+    /// (0, 1) on a horizontal crack.
+    pub normal: [f64; 2],
 }
 
-/// A horizontal crack: node pairs ordered by x, tip nodes shared and not listed.
+/// A crack: its node pairs (a tip inside the body is a shared node, not a pair).
 #[derive(Clone, Debug, Serialize)]
 pub struct Crack {
-    /// Height of the crack line (m).
-    pub y_m: f64,
-    /// Left tip (m).
-    pub x0_m: f64,
-    /// Right tip (m).
-    pub x1_m: f64,
-    /// Node pairs strictly inside the segment, ordered by x.
+    /// The crack's ends (x, y) (m): the left and right tips of a horizontal crack.
+    pub tips_m: [[f64; 2]; 2],
+    /// Node pairs; along x on a horizontal crack.
     pub pairs: Vec<CrackPair>,
 }
 
@@ -488,7 +491,11 @@ impl Mesh {
             let slave = self.nodes.len();
             self.nodes.push(self.nodes[master]);
             slave_of.insert(master, slave);
-            pairs.push(CrackPair { master, slave });
+            pairs.push(CrackPair {
+                master,
+                slave,
+                normal: UP,
+            });
         }
         for t in &mut self.triangles {
             let centroid_y =
@@ -502,9 +509,7 @@ impl Mesh {
             }
         }
         Ok(Crack {
-            y_m,
-            x0_m,
-            x1_m,
+            tips_m: [[x0_m, y_m], [x1_m, y_m]],
             pairs,
         })
     }

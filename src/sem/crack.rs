@@ -3,7 +3,7 @@
 
 use super::{SemModel, Split};
 use crate::error::{Error, Result};
-use crate::mesh::{Crack, CrackPair};
+use crate::mesh::{Crack, CrackPair, UP};
 
 impl SemModel {
     /// Splits the node line of a horizontal crack at height `y_m` from `x0_m` to `x1_m`
@@ -87,12 +87,14 @@ impl SemModel {
             .map(|i| CrackPair {
                 master: self.node(i, line),
                 slave: first_duplicate + i - first,
+                normal: UP,
             })
             .collect();
         let crack = Crack {
-            y_m: self.rows_m[row],
-            x0_m: self.x_nodes_m[i0],
-            x1_m: self.x_nodes_m[i1],
+            tips_m: [
+                [self.x_nodes_m[i0], self.rows_m[row]],
+                [self.x_nodes_m[i1], self.rows_m[row]],
+            ],
             pairs,
         };
         let split = Split {
