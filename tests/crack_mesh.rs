@@ -79,15 +79,16 @@ fn crack_snaps_to_the_nearest_mesh_lines_and_reports_them() {
     assert_eq!(p.depth_requested_m, c.depth_m);
     assert!((p.x0_requested_m - 2.4e-3).abs() < 1e-15 && (p.x1_requested_m - 3.6e-3).abs() < 1e-15);
     let crack = scene.crack().unwrap();
-    assert_eq!((crack.x0_m, crack.x1_m), (p.x0_used_m, p.x1_used_m));
-    assert!((height - crack.y_m - p.depth_used_m).abs() < 1e-15);
+    let [[x0, y], [x1, _]] = crack.tips_m;
+    assert_eq!((x0, x1), (p.x0_used_m, p.x1_used_m));
+    assert!((height - y - p.depth_used_m).abs() < 1e-15);
     // on mesh lines, and within half the spacing of the lines around the requested value
     let within_half = |lines: &[f64], requested: f64, used: f64| {
         let k = lines.partition_point(|&l| l <= requested);
         let half = 0.5 * (lines[k] - lines[k - 1]);
         lines.contains(&used) && (used - requested).abs() <= half
     };
-    assert!(within_half(&grid.y_m, height - c.depth_m, crack.y_m));
+    assert!(within_half(&grid.y_m, height - c.depth_m, y));
     assert!(within_half(&grid.x_m, p.x0_requested_m, p.x0_used_m));
     assert!(within_half(&grid.x_m, p.x1_requested_m, p.x1_used_m));
     assert!(!p.tied);
