@@ -191,11 +191,11 @@ fn snapshot_titled(
         })
         .collect();
     if let Some(c) = scene.crack() {
-        overlays.push(Overlay {
-            points: c.tips_m.iter().map(|t| (t[0], t[1])).collect(),
+        overlays.extend(c.pieces_m.iter().map(|[a, b]| Overlay {
+            points: vec![(a[0], a[1]), (b[0], b[1])],
             color: (0, 0, 0),
             width: 3,
-        });
+        }));
     }
     let name = if component == 0 { "u_x" } else { "u_y" };
     let band = crate::transducer::band_label(scene.spec.transducer.as_ref());

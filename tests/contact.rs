@@ -43,7 +43,7 @@ fn bilinear_model(m: f64, k1: f64, k2: f64, eps: f64) -> Model {
         dashpots: vec![(3, c_slave)],
         fixed_dofs: vec![0, 2],
         crack: Some(Crack {
-            tips_m: [[-1.0, 0.0], [1.0, 0.0]],
+            pieces_m: vec![[[-1.0, 0.0], [1.0, 0.0]]],
             pairs: vec![CrackPair {
                 master: 0,
                 slave: 1,
@@ -120,7 +120,7 @@ fn two_bars(length: f64) -> (Model, Vec<usize>, Vec<usize>) {
         })
         .collect();
     let crack = Crack {
-        tips_m: [[0.0, length], [4.0 * h, length]],
+        pieces_m: vec![[[0.0, length], [4.0 * h, length]]],
         pairs,
     };
     let fixed: Vec<usize> = mesh
@@ -297,7 +297,7 @@ fn push_block(p_n: f64, p_t: f64, friction: f64) -> (RunOutput, f64) {
         &[],
         fixed,
         Some(Crack {
-            tips_m: [[0.0, 0.0], [w, 0.0]],
+            pieces_m: vec![[[0.0, 0.0], [w, 0.0]]],
             pairs,
         }),
     )

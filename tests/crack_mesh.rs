@@ -79,7 +79,7 @@ fn crack_snaps_to_the_nearest_mesh_lines_and_reports_them() {
     assert_eq!(p.depth_requested_m, c.depth_m);
     assert!((p.x0_requested_m - 2.4e-3).abs() < 1e-15 && (p.x1_requested_m - 3.6e-3).abs() < 1e-15);
     let crack = scene.crack().unwrap();
-    let [[x0, y], [x1, _]] = crack.tips_m;
+    let [[x0, y], [x1, _]] = crack.pieces_m[0];
     assert_eq!((x0, x1), (p.x0_used_m, p.x1_used_m));
     assert!((height - y - p.depth_used_m).abs() < 1e-15);
     // on mesh lines, and within half the spacing of the lines around the requested value

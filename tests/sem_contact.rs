@@ -53,7 +53,7 @@ fn parts(m: &SemModel, crack: &Crack) -> (Vec<usize>, Vec<usize>) {
     let line = m
         .y_nodes_m
         .iter()
-        .position(|&y| y == crack.tips_m[0][1])
+        .position(|&y| y == crack.pieces_m[0][0][1])
         .expect("crack line");
     let grid = m.nx() * m.y_nodes_m.len();
     let (mut below, mut above) = (Vec::new(), Vec::new());

@@ -109,8 +109,10 @@ pub struct CrackPair {
 /// A crack: its node pairs (a tip inside the body is a shared node, not a pair).
 #[derive(Clone, Debug, Serialize)]
 pub struct Crack {
-    /// The crack's ends (x, y) (m): the left and right tips of a horizontal crack.
-    pub tips_m: [[f64; 2]; 2],
+    /// The crack's straight pieces, each from one end (x, y) to the other (m): one from the
+    /// left tip to the right of a horizontal crack, the chord of each element side cut
+    /// otherwise.
+    pub pieces_m: Vec<[[f64; 2]; 2]>,
     /// Node pairs; along x on a horizontal crack.
     pub pairs: Vec<CrackPair>,
 }
@@ -509,7 +511,7 @@ impl Mesh {
             }
         }
         Ok(Crack {
-            tips_m: [[x0_m, y_m], [x1_m, y_m]],
+            pieces_m: vec![[[x0_m, y_m], [x1_m, y_m]]],
             pairs,
         })
     }

@@ -91,10 +91,10 @@ impl SemModel {
             })
             .collect();
         let crack = Crack {
-            tips_m: [
+            pieces_m: vec![[
                 [self.x_nodes_m[i0], self.rows_m[row]],
                 [self.x_nodes_m[i1], self.rows_m[row]],
-            ],
+            ]],
             pairs,
         };
         let split = Split {
