@@ -5,6 +5,7 @@ use crate::laminate::Laminate;
 use serde::Serialize;
 use std::collections::HashSet;
 
+pub mod cut;
 pub mod gmsh;
 pub mod quad;
 

@@ -437,4 +437,7 @@ impl Discretisation for UnstructuredSem {
     fn node_x(&self, node: usize) -> f64 {
         self.positions_m[node][0]
     }
+    fn crack(&self) -> Option<&crate::mesh::Crack> {
+        self.crack.as_ref()
+    }
 }

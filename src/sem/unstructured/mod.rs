@@ -22,7 +22,9 @@ use super::gll::Gll;
 use super::MAX_ORDER;
 use crate::error::{Error, Result};
 use crate::material::Material;
+use crate::mesh::cut::CutSide;
 use crate::mesh::quad::QuadMesh;
+use crate::mesh::{Crack, CrackPair};
 use std::collections::HashMap;
 
 /// Spectral elements of one order on a quadrilateral mesh: the GLL points, their metric,
@@ -45,8 +47,11 @@ pub struct UnstructuredSem {
     /// (DOF, k) of the diagonal springs of viscous-spring edges (none unless set, see
     /// [`UnstructuredSem::viscous_springs`]), added to K u; sorted by DOF, each DOF once.
     pub springs: Vec<(usize, f64)>,
-    /// The mesh, its elements counter-clockwise.
+    /// The mesh, its elements counter-clockwise (cut along the crack, if any).
     pub mesh: QuadMesh,
+    /// The crack's GLL node pairs, each in its own frame (none unless built by
+    /// [`UnstructuredSem::cracked`]).
+    pub crack: Option<Crack>,
     gll: Gll,
     /// D[i * n + k] = l_k'(x_i), the GLL derivative matrix (n = p + 1).
     derivative: Vec<f64>,
@@ -121,10 +126,80 @@ impl UnstructuredSem {
             stiffness: element_stiffness(&mesh, &materials),
             elements: mesh.elements.len(),
             mesh,
+            crack: None,
             materials,
             incidence_start,
             incidence,
         })
+    }
+
+    /// Spectral elements on `mesh` cut along `segments` (pairs of corner nodes along element
+    /// sides: [`QuadMesh::cut`]), with the crack's pairs: at every GLL point of a cut side,
+    /// the node on the master's face and the one on the slave's, with the side's normal
+    /// there (into the master; averaged over the sides meeting at a corner). A tip inside
+    /// the body is one node and has no pair.
+    pub fn cracked(
+        mesh: &QuadMesh,
+        materials: Vec<Material>,
+        order: usize,
+        segments: &[[usize; 2]],
+    ) -> Result<Self> {
+        let mut checked = mesh.clone();
+        checked.validate(materials.len(), order + 2)?;
+        let (cut, sides) = checked.cut(segments)?;
+        let mut model = UnstructuredSem::new(&cut, materials, order)?;
+        model.crack = Some(model.crack_pairs(&sides));
+        Ok(model)
+    }
+
+    /// The GLL node pairs of the cut `sides` (see [`UnstructuredSem::cracked`]).
+    fn crack_pairs(&self, sides: &[CutSide]) -> Crack {
+        let p = self.order;
+        let mut index = HashMap::<(usize, usize), usize>::new();
+        let mut pairs: Vec<CrackPair> = Vec::new();
+        let mut pieces_m = Vec::with_capacity(sides.len());
+        for side in sides {
+            let (em, sm) = side.master;
+            let (es, ss) = side.slave;
+            let at = |e: usize, s: usize, t: usize| {
+                let (i, j) = side_point(p, s, t);
+                self.node(e, i, j)
+            };
+            let (first, last) = (
+                self.positions_m[at(em, sm, 0)],
+                self.positions_m[at(em, sm, p)],
+            );
+            pieces_m.push([first, last]);
+            let same_way = {
+                let x = self.positions_m[at(es, ss, 0)];
+                (x[0] - first[0]).hypot(x[1] - first[1]) < (x[0] - last[0]).hypot(x[1] - last[1])
+            };
+            for t in 0..=p {
+                let master = at(em, sm, t);
+                let slave = at(es, ss, if same_way { t } else { p - t });
+                if master == slave {
+                    continue;
+                }
+                let n = self.mesh.inward_normal(em, sm, self.gll.points[t]);
+                if let Some(&k) = index.get(&(master, slave)) {
+                    pairs[k].normal = [pairs[k].normal[0] + n[0], pairs[k].normal[1] + n[1]];
+                } else if let Some(&k) = index.get(&(slave, master)) {
+                    pairs[k].normal = [pairs[k].normal[0] - n[0], pairs[k].normal[1] - n[1]];
+                } else {
+                    index.insert((master, slave), pairs.len());
+                    pairs.push(CrackPair {
+                        master,
+                        slave,
+                        normal: n,
+                    });
+                }
+            }
+        }
+        for pair in &mut pairs {
+            let length = pair.normal[0].hypot(pair.normal[1]);
+            pair.normal = pair.normal.map(|c| c / length);
+        }
+        Crack { pieces_m, pairs }
     }
 
     /// Number of DOFs.

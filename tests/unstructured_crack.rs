@@ -1,0 +1,195 @@
+//! Cracks on unstructured spectral elements ([`UnstructuredSem::cracked`]): a mesh cut along
+//! a chain of element sides, contact and friction in each pair's own frame.
+//!
+//! The pushed block of `tests/sem_contact.rs` (an epoxy block on a fixed base, a
+//! through-crack between them, a push ramped up on its top) is built here as a quadrilateral
+//! mesh and turned by an angle: the block must slide at the Coulomb deceleration (T - mu N)/m
+//! along its own face, or stick, at any angle, and the turned runs must be the level run
+//! turned.
+
+mod common;
+
+use common::*;
+use trnews::contact::{ContactMethod, ContactOptions};
+use trnews::mesh::quad::{Quad, QuadMesh};
+use trnews::sem::unstructured::UnstructuredSem;
+use trnews::signal::Signal;
+use trnews::solve::{run_on, Quantity, Receiver, RunConfig, RunOutput, Source};
+
+/// The base's and the block's heights (m); the block is [`BLOCK_WIDTH`] wide.
+const BASE: f64 = 0.125e-3;
+const BLOCK: f64 = 0.25e-3;
+/// Element columns and the order: [`tests/sem_contact.rs`]'s FRICTION_GRID, where
+/// node-to-node Coulomb friction does not chatter.
+const COLUMNS: usize = 16;
+const ORDER: usize = 2;
+
+/// The base (one element row) and the block (two) as 4-node quadrilaterals turned by
+/// `angle` about the origin, and the chain of element sides between them.
+fn turned_block(angle: f64) -> (QuadMesh, Vec<[usize; 2]>) {
+    let rows = [0.0, BASE, BASE + 0.5 * BLOCK, BASE + BLOCK];
+    let (c, s) = (angle.cos(), angle.sin());
+    let mut nodes = Vec::new();
+    for &y in &rows {
+        for i in 0..=COLUMNS {
+            let x = BLOCK_WIDTH * i as f64 / COLUMNS as f64;
+            nodes.push([c * x - s * y, s * x + c * y]);
+        }
+    }
+    let at = |i: usize, j: usize| j * (COLUMNS + 1) + i;
+    let elements = (0..3)
+        .flat_map(|j| (0..COLUMNS).map(move |i| (i, j)))
+        .enumerate()
+        .map(|(k, (i, j))| Quad {
+            nodes: vec![at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)],
+            material: 0,
+            angle_rad: 0.0,
+            tag: k as u64 + 1,
+        })
+        .collect();
+    let crack = (0..COLUMNS).map(|i| [at(i, 1), at(i + 1, 1)]).collect();
+    (QuadMesh { nodes, elements }, crack)
+}
+
+/// The block pushed by (p_t, -p_n) in its own frame at `angle`: the run, the block's mass
+/// and the model.
+fn push(angle: f64, p_n: f64, p_t: f64, friction: f64) -> (RunOutput, f64, UnstructuredSem) {
+    let (mesh, crack) = turned_block(angle);
+    let mut m = UnstructuredSem::cracked(&mesh, vec![epoxy()], ORDER, &crack).unwrap();
+    let n = ORDER + 1;
+    let points = |rows: std::ops::Range<usize>| {
+        let mut nodes: Vec<usize> = rows
+            .flat_map(|row| (0..COLUMNS).map(move |i| row * COLUMNS + i))
+            .flat_map(|e| (0..n * n).map(move |q| (e, q % n, q / n)))
+            .map(|(e, i, j)| m.node(e, i, j))
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        nodes
+    };
+    let (base, block) = (points(0..1), points(1..3));
+    assert!(
+        base.iter().all(|b| block.binary_search(b).is_err()),
+        "the cut parts share no node"
+    );
+    m.fixed_dofs = base.iter().flat_map(|&b| [2 * b, 2 * b + 1]).collect();
+    let (c, s) = (angle.cos(), angle.sin());
+    let (tangent, normal) = ([c, s], [-s, c]);
+    let dt = 1e-9;
+    // the push on the top side (eta = 1) of the top row: GLL weight times half the side
+    let push = [
+        p_t * tangent[0] - p_n * normal[0],
+        p_t * tangent[1] - p_n * normal[1],
+    ];
+    let magnitude = p_n.hypot(p_t);
+    let half = 0.5 * BLOCK_WIDTH / COLUMNS as f64;
+    let weights_1d = trnews::sem::gll::Gll::new(ORDER).weights;
+    let mut load = std::collections::BTreeMap::<usize, f64>::new();
+    for e in 2 * COLUMNS..3 * COLUMNS {
+        for (i, w) in weights_1d.iter().enumerate() {
+            let node = m.node(e, i, ORDER);
+            for k in 0..2 {
+                *load.entry(2 * node + k).or_default() += w * half * push[k] / magnitude;
+            }
+        }
+    }
+    let source = Source {
+        weights: load.into_iter().collect(),
+        signal: ramped_push(magnitude, dt),
+    };
+    let mass: f64 = block.iter().map(|&b| m.lumped_mass[2 * b]).sum();
+    let receiver = Receiver {
+        name: "mean tangential velocity".into(),
+        weights: block
+            .iter()
+            .flat_map(|&b| {
+                let share = m.lumped_mass[2 * b] / mass;
+                [(2 * b, share * tangent[0]), (2 * b + 1, share * tangent[1])]
+            })
+            .collect(),
+        quantity: Quantity::Velocity,
+    };
+    let free: Vec<bool> = (0..m.dofs()).map(|d| !m.fixed_dofs.contains(&d)).collect();
+    let dt_crit = 2.0 / m.max_eigenvalue(&free).0.sqrt();
+    let config = RunConfig {
+        dt_s: Some(dt),
+        duration_s: DURATION,
+        contact: Some(ContactOptions {
+            method: ContactMethod::Exact,
+            friction,
+            normal_stress_lag_s: 0.0,
+        }),
+        progress: false,
+        ..Default::default()
+    };
+    let out = run_on(&m, dt_crit, &[source], &[receiver], &config).unwrap();
+    (out, mass, m)
+}
+
+/// The crack's pairs carry the face's normal, turned with the mesh, and every pair is a
+/// node of the block over one of the base.
+#[test]
+fn the_cut_pairs_face_each_other_along_the_turned_normal() {
+    let angle = 30f64.to_radians();
+    let (mesh, crack) = turned_block(angle);
+    let m = UnstructuredSem::cracked(&mesh, vec![epoxy()], 3, &crack).unwrap();
+    let pairs = &m.crack.as_ref().unwrap().pairs;
+    // 16 sides of 4 points, corners shared: 16 * 3 + 1 (a through-crack: both ends split)
+    assert_eq!(pairs.len(), COLUMNS * 3 + 1);
+    for p in pairs {
+        let (xm, xs) = (m.positions_m[p.master], m.positions_m[p.slave]);
+        assert!((xm[0] - xs[0]).hypot(xm[1] - xs[1]) < 1e-15, "{p:?}");
+        assert!(
+            (p.normal[0] + angle.sin()).abs() < 1e-14 && (p.normal[1] - angle.cos()).abs() < 1e-14,
+            "{p:?}"
+        );
+    }
+}
+
+/// The block slides at (T - mu N)/m along its face within 2% (the level test's bound) at
+/// 0, 30 and 90 degrees, and the turned runs' mean tangential velocities are the level
+/// run's to 1e-9 of their peak (measured in the eprintln). Below the friction limit it
+/// sticks at 30 degrees as on the level. The ledger closes with friction at every angle.
+#[test]
+fn a_turned_pushed_block_slides_at_coulomb_deceleration_or_sticks() {
+    let (mu, p_n, p_t) = (0.3, 1e6, 0.6e6);
+    let (level, mass, _) = push(0.0, p_n, p_t, mu);
+    let expected = (p_t - mu * p_n) * BLOCK_WIDTH / mass;
+    let peak = |s: &Signal| s.samples.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for degrees in [0.0f64, 30.0, 90.0] {
+        let (out, _, _) = push(degrees.to_radians(), p_n, p_t, mu);
+        let measured = acceleration_after_ramp(&out.traces[0]);
+        let difference = out.traces[0]
+            .samples
+            .iter()
+            .zip(&level.traces[0].samples)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+            / peak(&level.traces[0]);
+        let contact = out.report.contact.as_ref().unwrap();
+        eprintln!(
+            "turned {degrees} degrees: acceleration {:.5} of (T - mu N)/m, {difference:.1e} \
+             from the level run, energy residual {:.1e}, penetration {:.1e} m",
+            measured / expected,
+            out.report.energy_residual_peak,
+            contact.max_penetration_m
+        );
+        assert!(
+            (measured / expected - 1.0).abs() < 0.02,
+            "{degrees}: {measured:e}"
+        );
+        assert!(difference < 1e-9, "{degrees}: {difference:e}");
+        assert!(contact.max_pairs_slipping > 0);
+        assert!(out.report.energy_residual_peak < 1e-9, "{:?}", out.report);
+    }
+    let (out, mass, _) = push(30f64.to_radians(), p_n, 0.5 * mu * p_n, mu);
+    let free = 0.5 * mu * p_n * BLOCK_WIDTH / mass * (DURATION - 0.5 * RAMP);
+    let mean = mean_after_ramp(&out.traces[0]);
+    eprintln!(
+        "sticking at 30 degrees: mean velocity {:e} of free sliding",
+        mean / free
+    );
+    assert!(
+        mean.abs() < 0.02 * free,
+        "{mean} m/s (free sliding: {free} m/s)"
+    );
+}
