@@ -215,6 +215,41 @@ pub fn read_quads(bytes: &[u8], physical: &HashMap<i32, (usize, f64)>) -> Result
 /// as a physical line. An error when the group has no line element.
 pub fn read_physical_line(bytes: &[u8], group: i32) -> Result<Vec<[f64; 2]>> {
     let msh = parse(bytes)?;
+    let (nodes, index_of) = nodes_of(&msh)?;
+    let mut seen = std::collections::HashSet::new();
+    let mut points = Vec::new();
+    for [a, b] in line_ends(&msh, group, &[mshio::ElementType::Lin2])? {
+        for tag in [a, b] {
+            let i = node_index(&index_of, group, tag)?;
+            if seen.insert(tag) {
+                points.push(nodes[i]);
+            }
+        }
+    }
+    Ok(points)
+}
+
+/// The line elements (2- or 3-node: `Lin2`, `Lin3`) of the curves in physical group
+/// `group` as pairs of end nodes, indexed as [`read_quads`] indexes them: the element sides
+/// a crack drawn as a physical line runs along. An error when the group has none.
+pub fn read_line_sides(bytes: &[u8], group: i32) -> Result<Vec<[usize; 2]>> {
+    use mshio::ElementType::{Lin2, Lin3};
+    let msh = parse(bytes)?;
+    let (_, index_of) = nodes_of(&msh)?;
+    line_ends(&msh, group, &[Lin2, Lin3])?
+        .into_iter()
+        .map(|[a, b]| {
+            Ok([
+                node_index(&index_of, group, a)?,
+                node_index(&index_of, group, b)?,
+            ])
+        })
+        .collect()
+}
+
+/// The end node tags of the line elements of `kinds` on the curves of physical group
+/// `group`, in file order; an error naming the group when there are none.
+fn line_ends(msh: &Msh, group: i32, kinds: &[mshio::ElementType]) -> Result<Vec<[u64; 2]>> {
     let curves: Vec<i32> = msh
         .data
         .entities
@@ -227,33 +262,35 @@ pub fn read_physical_line(bytes: &[u8], group: i32) -> Result<Vec<[f64; 2]>> {
                 .collect()
         })
         .unwrap_or_default();
-    let (nodes, index_of) = nodes_of(&msh)?;
-    let mut seen = std::collections::HashSet::new();
-    let mut points = Vec::new();
-    for block in msh
+    let ends: Vec<[u64; 2]> = msh
         .data
         .elements
         .iter()
         .flat_map(|e| &e.element_blocks)
-        .filter(|b| b.element_type == mshio::ElementType::Lin2 && curves.contains(&b.entity_tag))
-    {
-        for tag in block.elements.iter().flat_map(|e| e.nodes.iter().take(2)) {
-            let p = index_of.get(tag).map(|&i| nodes[i]).ok_or_else(|| {
-                Error::Mesh(format!(
-                    "a line element of physical group {group} refers to node {tag}, which is not in $Nodes"
-                ))
-            })?;
-            if seen.insert(*tag) {
-                points.push(p);
-            }
-        }
-    }
-    if points.is_empty() {
+        .filter(|b| kinds.contains(&b.element_type) && curves.contains(&b.entity_tag))
+        .flat_map(|b| &b.elements)
+        .filter_map(|e| (e.nodes.len() >= 2).then(|| [e.nodes[0], e.nodes[1]]))
+        .collect();
+    if ends.is_empty() {
         return Err(Error::Mesh(format!(
-            "physical group {group} has no line elements (Lin2) in the MSH file"
+            "physical group {group} has no line elements ({}) in the MSH file",
+            kinds
+                .iter()
+                .map(|k| format!("{k:?}"))
+                .collect::<Vec<_>>()
+                .join(" or ")
         )));
     }
-    Ok(points)
+    Ok(ends)
+}
+
+/// The index of node `tag`, which a line element of `group` refers to.
+fn node_index(index_of: &HashMap<u64, usize>, group: i32, tag: u64) -> Result<usize> {
+    index_of.get(&tag).copied().ok_or_else(|| {
+        Error::Mesh(format!(
+            "a line element of physical group {group} refers to node {tag}, which is not in $Nodes"
+        ))
+    })
 }
 
 #[cfg(test)]

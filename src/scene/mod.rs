@@ -164,7 +164,7 @@ impl Scene {
         match &self.body {
             Body::T3(model) => model.crack.as_ref(),
             Body::Sem { model, .. } => model.crack(),
-            Body::Unstructured { .. } => None,
+            Body::Unstructured { model, .. } => model.crack.as_ref(),
         }
     }
 

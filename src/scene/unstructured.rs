@@ -8,17 +8,19 @@ use super::build::{gmsh_bytes, gmsh_materials, group_tag, Region, BYTES_PER_NODE
 use super::edges::{absorbing_edges, edge_conditions, held_and_pinned_dofs, is_periodic};
 use super::sem::{stability, OnSem};
 use super::sources::{source_weights, transmitter_weights};
+use super::spec::EdgeCondition;
 use super::spec::{GmshSpec, SceneSpec};
 use super::{Body, Scene};
 use crate::error::{Error, Result};
 use crate::laminate::Laminate;
 use crate::mesh::Mesh;
+use crate::mesh::Side;
 use crate::sem::unstructured::UnstructuredSem;
 use std::collections::HashMap;
 
 /// The scene on spectral elements of `order` over `g`'s quadrilaterals.
 pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scene> {
-    refuse_unbuilt(spec, g)?;
+    refuse_unbuilt(spec)?;
     let bytes = gmsh_bytes(g)?;
     let (materials, groups) = gmsh_materials(spec, g)?;
     let mut physical: HashMap<i32, (usize, f64)> =
@@ -53,18 +55,28 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
         points * BYTES_PER_NODE,
         "use a lower order or a coarser mesh",
     )?;
-    let mut model = UnstructuredSem::new(&mesh, materials.clone(), order)
-        .map_err(|e| Error::invalid("gmsh.path", &g.path, e.to_string()))?;
-    crate::budget::check()?;
-    let nodes = node_triangles(&model);
-    let (x0, x1, y0, y1) = model.bounds();
-    let region = Region {
-        x0,
-        y0,
-        width: x1 - x0,
-        height: y1 - y0,
+    let uncut = || {
+        UnstructuredSem::new(&mesh, materials.clone(), order)
+            .map_err(|e| Error::invalid("gmsh.path", &g.path, e.to_string()))
     };
+    let cut = |group: i32| {
+        let as_crack = |e: Error| Error::invalid("gmsh.crack_line", group, e.to_string());
+        let sides = crate::mesh::gmsh::read_line_sides(&bytes, group).map_err(as_crack)?;
+        UnstructuredSem::cracked(&mesh, materials.clone(), order, &sides).map_err(as_crack)
+    };
+    // The crack-tied companion is the uncut mesh, stepped at the cracked model's step.
+    let (model, cracked) = match g.crack_line {
+        None => (uncut()?, None),
+        Some(group) if g.tied => (uncut()?, Some(cut(group)?)),
+        Some(group) => (cut(group)?, None),
+    };
+    crate::budget::check()?;
     let conditions = edge_conditions(spec)?;
+    let Constrained {
+        model,
+        nodes,
+        region,
+    } = constrain(spec, &conditions, model)?;
     let on = OnSem {
         model: &model,
         nodes: &nodes,
@@ -75,24 +87,10 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
         source_weights(&on, &spec.sources)?
     };
     let receivers = super::build_receivers(&on, &spec.receivers, region.height)?;
-    let absorbing = absorbing_edges(spec, &conditions, &nodes, region)?;
-    let mut fixed = held_and_pinned_dofs(spec, &nodes, &conditions);
-    fixed.sort_unstable();
-    fixed.dedup();
-    model.fixed_dofs = fixed;
-    let sides: Vec<_> = absorbing.iter().map(|a| a.side).collect();
-    model.dashpots = model.lysmer_dashpots(&sides);
-    // one spring per DOF, sorted (a corner shared by two viscous-spring edges sums both)
-    let mut springs = std::collections::BTreeMap::<usize, f64>::new();
-    for edge in &absorbing {
-        if let Some(r) = edge.spring_distance_m {
-            for (d, k) in model.viscous_springs(edge.side, r)? {
-                *springs.entry(d).or_default() += k;
-            }
-        }
-    }
-    model.springs = springs.into_iter().collect();
-    let stability = stability(&model);
+    let stability = match cracked {
+        Some(c) => stability(&constrain(spec, &conditions, c)?.model),
+        None => stability(&model),
+    };
     Ok(Scene {
         spec: spec.clone(),
         laminate: Laminate {
@@ -108,17 +106,55 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
     })
 }
 
-/// Refuses what spectral elements on a Gmsh mesh do not take yet, naming the field: a
-/// crack (line or rectangle), periodic edges, losses.
-fn refuse_unbuilt(spec: &SceneSpec, g: &GmshSpec) -> Result<()> {
-    if let Some(line) = g.crack_line {
-        return Err(Error::invalid(
-            "gmsh.crack_line",
-            line,
-            "cracks on spectral elements of a Gmsh mesh are not built yet: leave gmsh.order \
-             out to run the cracked mesh on linear triangles",
-        ));
+/// A model with its edges' conditions, its GLL nodes as triangles and its bounding box.
+struct Constrained {
+    model: UnstructuredSem,
+    nodes: Mesh,
+    region: Region,
+}
+
+/// `model` with the scene's fixed DOFs, dashpots and viscous springs on its bounding box's
+/// edges (a crack's faces each get theirs: they are picked by position).
+fn constrain(
+    spec: &SceneSpec,
+    conditions: &[(Side, EdgeCondition); 4],
+    mut model: UnstructuredSem,
+) -> Result<Constrained> {
+    let nodes = node_triangles(&model);
+    let (x0, x1, y0, y1) = model.bounds();
+    let region = Region {
+        x0,
+        y0,
+        width: x1 - x0,
+        height: y1 - y0,
+    };
+    let absorbing = absorbing_edges(spec, conditions, &nodes, region)?;
+    let mut fixed = held_and_pinned_dofs(spec, &nodes, conditions);
+    fixed.sort_unstable();
+    fixed.dedup();
+    model.fixed_dofs = fixed;
+    let sides: Vec<_> = absorbing.iter().map(|a| a.side).collect();
+    model.dashpots = model.lysmer_dashpots(&sides);
+    // one spring per DOF, sorted (a corner shared by two viscous-spring edges sums both)
+    let mut springs = std::collections::BTreeMap::<usize, f64>::new();
+    for edge in &absorbing {
+        if let Some(r) = edge.spring_distance_m {
+            for (d, k) in model.viscous_springs(edge.side, r)? {
+                *springs.entry(d).or_default() += k;
+            }
+        }
     }
+    model.springs = springs.into_iter().collect();
+    Ok(Constrained {
+        model,
+        nodes,
+        region,
+    })
+}
+
+/// Refuses what spectral elements on a Gmsh mesh do not take yet, naming the field: a
+/// rectangular crack (the crack is `gmsh.crack_line`), periodic edges, losses.
+fn refuse_unbuilt(spec: &SceneSpec) -> Result<()> {
     if spec.crack.is_some() {
         return Err(Error::invalid(
             "crack",

@@ -5,7 +5,10 @@ package: python3 gmsh_quads.py):
   about 0.5 mm, physical surface 1 (the torsional-mode check of the unstructured spectral
   elements, src/mesh/gmsh.rs);
 - gmsh_disk_q4.msh: the same disk with 4-node (straight-sided) quadrilaterals;
-- gmsh_quad_plate.msh and gmsh_quad_plate_unstructured.msh: a two-layer plate (below)."""
+- gmsh_quad_plate.msh, gmsh_quad_plate_crack.msh and gmsh_quad_plate_unstructured.msh: a
+  two-layer plate (below);
+- gmsh_hole.msh: a square with a circular hole;
+- gmsh_quad_crack.msh: a plate with an inclined crack."""
 import gmsh
 
 
@@ -33,40 +36,62 @@ disk("gmsh_disk_q9", True)
 disk("gmsh_disk_q4", False)
 
 
-def layered_plate():
+def layered_plate(name, crack):
     """gmsh_quad_plate.msh: the 4 mm x 2 mm plate of gmsh_plate.msh without its crack (physical
     surfaces 1: lower 1.2 mm of 0/90 fabric, 2: upper 0.8 mm of epoxy) as a transfinite grid
     of 4-node quadrilaterals, 0.5 mm along x and 0.4 mm across: the elements a layered
-    spectral-element scene of those sizes cuts (tests/unstructured_scene.rs compares them)."""
+    spectral-element scene of those sizes cuts (tests/unstructured_scene.rs compares them).
+    gmsh_quad_plate_crack.msh: the same with the interface from x = 1 to 3 mm as physical
+    line 3, the crack of a layered scene at depth 0.8 mm, 2 mm long, centred."""
     gmsh.initialize()
     gmsh.option.setNumber("General.Terminal", 0)
-    gmsh.model.add("quad_plate")
+    gmsh.model.add(name)
     occ = gmsh.model.occ
     lower = occ.addRectangle(0, 0, 0, 4e-3, 1.2e-3)
     upper = occ.addRectangle(0, 1.2e-3, 0, 4e-3, 0.8e-3)
-    occ.fragment([(2, lower), (2, upper)], [])
+    tools = []
+    if crack:
+        tools = [(1, occ.addLine(occ.addPoint(1e-3, 1.2e-3, 0), occ.addPoint(3e-3, 1.2e-3, 0)))]
+    occ.fragment([(2, lower), (2, upper)], tools)
     occ.synchronize()
     for dim, curve in gmsh.model.getEntities(1):
         (x0, y0, _, x1, y1, _) = gmsh.model.getBoundingBox(dim, curve)
         if abs(y1 - y0) < 1e-5:
-            points = 9
+            points = round((x1 - x0) / 0.5e-3) + 1
         elif y1 <= 1.2e-3 + 1e-5:
             points = 4
         else:
             points = 3
         gmsh.model.mesh.setTransfiniteCurve(curve, points)
-    for _, surface in gmsh.model.getEntities(2):
-        gmsh.model.mesh.setTransfiniteSurface(surface)
+    surfaces = [s for _, s in gmsh.model.getEntities(2)]
+    for surface in surfaces:
+        # the corners of the rectangle (the crack's tips are points on its side, not
+        # corners; Gmsh pads bounding boxes by 1e-7)
+        (x0, y0, _, x1, y1, _) = gmsh.model.getBoundingBox(2, surface)
+        points = [p for _, p in gmsh.model.getBoundary([(2, surface)], recursive=True)]
+        corners = [p for p in points
+                   if min(abs(gmsh.model.getValue(0, p, [])[0] - x) for x in (x0, x1)) < 1e-6
+                   and min(abs(gmsh.model.getValue(0, p, [])[1] - y) for y in (y0, y1)) < 1e-6]
+        gmsh.model.mesh.setTransfiniteSurface(surface, "Left", corners)
         gmsh.model.mesh.setRecombine(2, surface)
-    gmsh.model.addPhysicalGroup(2, [lower], 1)
-    gmsh.model.addPhysicalGroup(2, [upper], 2)
+    below = [s for s in surfaces if gmsh.model.getBoundingBox(2, s)[4] < 1.2e-3 + 1e-5]
+    gmsh.model.addPhysicalGroup(2, below, 1)
+    gmsh.model.addPhysicalGroup(2, [s for s in surfaces if s not in below], 2)
+    if crack:
+        inside = [c for _, c in gmsh.model.getEntities(1)
+                  if abs(gmsh.model.getBoundingBox(1, c)[1] - 1.2e-3) < 1e-6
+                  and abs(gmsh.model.getBoundingBox(1, c)[4] - 1.2e-3) < 1e-6
+                  and gmsh.model.getBoundingBox(1, c)[0] > 0.5e-3
+                  and gmsh.model.getBoundingBox(1, c)[3] < 3.5e-3]
+        gmsh.model.addPhysicalGroup(1, inside, 3)
     gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
     gmsh.model.mesh.generate(2)
-    gmsh.write("gmsh_quad_plate.msh")
+    gmsh.write(name + ".msh")
     gmsh.finalize()
 
 
-layered_plate()
+layered_plate("gmsh_quad_plate", False)
+layered_plate("gmsh_quad_plate_crack", True)
 
 
 def unstructured_plate():
@@ -142,3 +167,39 @@ def hole_plate():
 
 
 hole_plate()
+
+
+def cracked_plate():
+    """gmsh_quad_crack.msh: a 4 mm x 2 mm plate (physical surface 1) of 9-node
+    quadrilaterals of about 0.2 mm, conforming to an inclined crack from (1.5, 0.7) to
+    (2.5, 1.3) mm, tips inside the plate (physical line 5) (tests/unstructured_crack.rs runs a
+    pulse through it)."""
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.add("quad_crack")
+    occ = gmsh.model.occ
+    plate = occ.addRectangle(0, 0, 0, 4e-3, 2e-3)
+    a = occ.addPoint(1.5e-3, 0.7e-3, 0)
+    b = occ.addPoint(2.5e-3, 1.3e-3, 0)
+    crack = occ.addLine(a, b)
+    occ.fragment([(2, plate)], [(1, crack)])
+    occ.synchronize()
+    (_, surface), = gmsh.model.getEntities(2)
+    gmsh.model.addPhysicalGroup(2, [surface], 1)
+    inside = [c for _, c in gmsh.model.getEntities(1)
+              if gmsh.model.getBoundingBox(1, c)[0] > 1e-3 and gmsh.model.getBoundingBox(1, c)[3] < 3e-3]
+    gmsh.model.addPhysicalGroup(1, inside, 5)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.2e-3)
+    gmsh.option.setNumber("Mesh.RecombineAll", 1)
+    gmsh.option.setNumber("Mesh.Algorithm", 8)
+    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.model.mesh.generate(2)
+    gmsh.model.mesh.setOrder(2)
+    types, tags, _ = gmsh.model.mesh.getElements(2)
+    print("cracked plate:", {gmsh.model.mesh.getElementProperties(t)[0]: len(k) for t, k in zip(types, tags)})
+    gmsh.write("gmsh_quad_crack.msh")
+    gmsh.finalize()
+
+
+cracked_plate()
