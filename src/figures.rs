@@ -225,6 +225,14 @@ pub fn scattered_snapshot(
     let crack = cracked
         .crack()
         .ok_or_else(|| Error::invalid("scene", "uncracked", "has no crack to scatter from"))?;
+    if matches!(cracked.body, crate::scene::Body::Unstructured { .. }) {
+        return Err(FigureError::Data(Error::invalid(
+            "scene",
+            "a Gmsh mesh on spectral elements",
+            "its crack-tied companion is the uncut mesh, numbered apart from the cut one: \
+             the scattered field is not drawn for it yet (compare receivers instead)",
+        )));
+    }
     let tied_nodes = tied.displacement.len() / 2;
     let mut twin: Vec<usize> = (0..cracked.mesh().nodes.len()).collect();
     for p in &crack.pairs {

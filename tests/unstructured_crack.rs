@@ -290,3 +290,21 @@ fn an_inclined_crack_in_a_gmsh_mesh_opens_shuts_and_scatters() {
         assert!(d > 0.01, "receiver {}: {d:e}", k + 1);
     }
 }
+
+/// The scattered-field figure subtracts the tied companion node by node; on a Gmsh mesh the
+/// companion is the uncut mesh, numbered apart, so the figure refuses, naming why.
+#[cfg(feature = "plot")]
+#[test]
+fn the_scattered_field_figure_refuses_a_cut_gmsh_mesh() {
+    let cracked = inclined_crack_scene(false);
+    let snap = trnews::solve::Snapshot {
+        time_s: 0.0,
+        displacement: vec![0.0; cracked.dofs()],
+    };
+    let path = std::env::temp_dir().join("never_written.png");
+    let e = trnews::figures::scattered_snapshot(&path, &cracked, &snap, &snap, 1)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("uncut mesh"), "{e}");
+    assert!(!path.exists());
+}
