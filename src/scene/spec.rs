@@ -35,7 +35,7 @@ pub enum LaminateSpec {
 /// A scene meshed by Gmsh: the T3 elements of an MSH 4.1 file (see
 /// [`crate::mesh::gmsh::read_msh`]), or with `order` spectral elements on its quadrilaterals
 /// ([`crate::mesh::gmsh::read_quads`]), materials by physical surface group, and optionally a
-/// crack drawn as a physical line (on triangles). The region's edges are the sides of the mesh's bounding
+/// crack drawn as a physical line. The region's edges are the sides of the mesh's bounding
 /// box (sources, receivers and edge conditions refer to them); `laminate`, `width_m` and
 /// the element sizes are not used.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -46,8 +46,11 @@ pub struct GmshSpec {
     pub path: String,
     /// The material of each physical surface group, keyed by the group's tag (`"1"`).
     pub materials: std::collections::BTreeMap<String, MaterialSpec>,
-    /// Tag of the physical line that is the crack: a horizontal straight line of element
-    /// edges strictly inside the mesh (contact acts on u_y, report Sec. 4.9).
+    /// Tag of the physical line that is the crack. On triangles: a horizontal straight line
+    /// of element edges strictly inside the mesh (contact acts on u_y, report Sec. 4.9).
+    /// On spectral elements (`order`): any line elements along element sides between two
+    /// elements - inclined, curved, kinked, branched, several, ending inside or on an edge -
+    /// with contact in each node pair's own normal/tangent frame ([`crate::mesh::cut`]).
     #[serde(default)]
     pub crack_line: Option<i32>,
     /// Contact on the crack faces; `None` leaves the crack open.
