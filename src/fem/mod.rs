@@ -132,57 +132,9 @@ impl Model {
         })
     }
 
-    /// Ties the left and right node columns: every node of the left side to the node of the
-    /// right side at the same height (both DOFs). A DOF held on either side is held on both.
-    /// The columns must match node for node (the layered meshes' columns do: they share the
-    /// row lines); otherwise an error names the first height without a partner.
+    /// Ties the left and right node columns ([`periodic_ties`]).
     pub fn tie_periodic(&mut self) -> Result<()> {
-        let mesh = &self.mesh;
-        let (left, right) = (mesh.side_nodes(Side::Left), mesh.side_nodes(Side::Right));
-        let tol = mesh.tolerance();
-        if let Some((&l, &r)) = left
-            .iter()
-            .zip(&right)
-            .find(|&(&l, &r)| (mesh.nodes[l][1] - mesh.nodes[r][1]).abs() > tol)
-        {
-            return Err(Error::invalid(
-                "edges.left, edges.right",
-                "periodic",
-                format!(
-                    "the left and right node columns do not match: y = {:e} m on the left \
-                     against {:e} m on the right",
-                    mesh.nodes[l][1], mesh.nodes[r][1]
-                ),
-            ));
-        }
-        if left.len() != right.len() {
-            return Err(Error::invalid(
-                "edges.left, edges.right",
-                "periodic",
-                format!(
-                    "the left edge has {} nodes, the right edge {}: the columns must match",
-                    left.len(),
-                    right.len()
-                ),
-            ));
-        }
-        let pairs: Vec<(usize, usize)> = left
-            .iter()
-            .zip(&right)
-            .flat_map(|(&l, &r)| [(2 * l, 2 * r), (2 * l + 1, 2 * r + 1)])
-            .collect();
-        let held: Vec<usize> = pairs
-            .iter()
-            .filter(|&&(l, r)| {
-                self.fixed_dofs.binary_search(&l).is_ok()
-                    || self.fixed_dofs.binary_search(&r).is_ok()
-            })
-            .flat_map(|&(l, r)| [l, r])
-            .collect();
-        self.fixed_dofs.extend(held);
-        self.fixed_dofs.sort_unstable();
-        self.fixed_dofs.dedup();
-        self.periodic = pairs;
+        self.periodic = periodic_ties(&self.mesh, &mut self.fixed_dofs)?;
         Ok(())
     }
 
@@ -190,6 +142,59 @@ impl Model {
     pub fn dofs(&self) -> usize {
         self.lumped_mass.len()
     }
+}
+
+/// The ties of periodic left and right edges: every node of the left side of `mesh` to the
+/// node of the right side at the same height (both DOFs). A DOF held on either side is
+/// added to `fixed_dofs` (sorted) on both. The columns must match node for node (the
+/// layered meshes' columns do: they share the row lines; a Gmsh mesh must be made periodic,
+/// `gmsh.model.mesh.setPeriodic`); otherwise an error names the first height without a
+/// partner.
+pub fn periodic_ties(mesh: &Mesh, fixed_dofs: &mut Vec<usize>) -> Result<Vec<(usize, usize)>> {
+    let (left, right) = (mesh.side_nodes(Side::Left), mesh.side_nodes(Side::Right));
+    let tol = mesh.tolerance();
+    if let Some((&l, &r)) = left
+        .iter()
+        .zip(&right)
+        .find(|&(&l, &r)| (mesh.nodes[l][1] - mesh.nodes[r][1]).abs() > tol)
+    {
+        return Err(Error::invalid(
+            "edges.left, edges.right",
+            "periodic",
+            format!(
+                "the left and right node columns do not match: y = {:e} m on the left \
+                 against {:e} m on the right",
+                mesh.nodes[l][1], mesh.nodes[r][1]
+            ),
+        ));
+    }
+    if left.len() != right.len() {
+        return Err(Error::invalid(
+            "edges.left, edges.right",
+            "periodic",
+            format!(
+                "the left edge has {} nodes, the right edge {}: the columns must match",
+                left.len(),
+                right.len()
+            ),
+        ));
+    }
+    let pairs: Vec<(usize, usize)> = left
+        .iter()
+        .zip(&right)
+        .flat_map(|(&l, &r)| [(2 * l, 2 * r), (2 * l + 1, 2 * r + 1)])
+        .collect();
+    let held: Vec<usize> = pairs
+        .iter()
+        .filter(|&&(l, r)| {
+            fixed_dofs.binary_search(&l).is_ok() || fixed_dofs.binary_search(&r).is_ok()
+        })
+        .flat_map(|&(l, r)| [l, r])
+        .collect();
+    fixed_dofs.extend(held);
+    fixed_dofs.sort_unstable();
+    fixed_dofs.dedup();
+    Ok(pairs)
 }
 
 fn element_nodes(mesh: &Mesh, t: [usize; 3]) -> [[f64; 2]; 3] {

@@ -241,3 +241,38 @@ fn row_assembly_matches_element_by_element_assembly() {
         assert!((a - b).abs() <= 1e-14 * scale, "{a} vs {b}");
     }
 }
+
+/// Left and right edges whose nodes are not at the same heights cannot be tied: the error
+/// names the edges and the first height without a partner, or the counts.
+#[test]
+fn periodic_ties_name_columns_that_do_not_match() {
+    let mesh = |right: &[f64]| Mesh {
+        nodes: [[0.0, 0.0], [0.0, 1.0]]
+            .into_iter()
+            .chain(right.iter().map(|&y| [1.0, y]))
+            .collect(),
+        triangles: vec![[0, 2, 1]],
+        element_material: vec![0],
+        interfaces_y_m: vec![],
+        grid: None,
+    };
+    let e = periodic_ties(&mesh(&[0.0, 0.6]), &mut vec![])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("edges.left, edges.right") && e.contains("1e0 m on the left"),
+        "{e}"
+    );
+    // a third node on the right at a height the left has (a crack face reaching the edge)
+    let e = periodic_ties(&mesh(&[0.0, 1.0, 1.0]), &mut vec![])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("the left edge has 2 nodes, the right edge 3"),
+        "{e}"
+    );
+    let mut fixed = vec![3];
+    let ties = periodic_ties(&mesh(&[0.0, 1.0]), &mut fixed).unwrap();
+    assert_eq!(ties, vec![(0, 4), (1, 5), (2, 6), (3, 7)]);
+    assert_eq!(fixed, vec![3, 7], "a DOF held on one side is held on both");
+}

@@ -20,7 +20,7 @@ use std::collections::HashMap;
 
 /// The scene on spectral elements of `order` over `g`'s quadrilaterals.
 pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scene> {
-    refuse_unbuilt(spec)?;
+    refuse_unbuilt(spec, g)?;
     let bytes = gmsh_bytes(g)?;
     let (materials, groups) = gmsh_materials(spec, g)?;
     let mut physical: HashMap<i32, (usize, f64)> =
@@ -132,6 +132,9 @@ fn constrain(
     let mut fixed = held_and_pinned_dofs(spec, &nodes, conditions);
     fixed.sort_unstable();
     fixed.dedup();
+    if is_periodic(conditions) {
+        model.periodic = crate::fem::periodic_ties(&nodes, &mut fixed)?;
+    }
     model.fixed_dofs = fixed;
     let sides: Vec<_> = absorbing.iter().map(|a| a.side).collect();
     model.dashpots = model.lysmer_dashpots(&sides);
@@ -153,8 +156,8 @@ fn constrain(
 }
 
 /// Refuses what spectral elements on a Gmsh mesh do not take yet, naming the field: a
-/// rectangular crack (the crack is `gmsh.crack_line`), periodic edges, losses.
-fn refuse_unbuilt(spec: &SceneSpec) -> Result<()> {
+/// rectangular crack (the crack is `gmsh.crack_line`), periodic edges with a crack, losses.
+fn refuse_unbuilt(spec: &SceneSpec, g: &GmshSpec) -> Result<()> {
     if spec.crack.is_some() {
         return Err(Error::invalid(
             "crack",
@@ -162,11 +165,12 @@ fn refuse_unbuilt(spec: &SceneSpec) -> Result<()> {
             "a Gmsh scene takes its crack from gmsh.crack_line: set crack: ()",
         ));
     }
-    if is_periodic(&edge_conditions(spec)?) {
+    if is_periodic(&edge_conditions(spec)?) && g.crack_line.is_some() {
         return Err(Error::invalid(
             "edges",
             "periodic",
-            "periodic edges are not built on spectral elements of a Gmsh mesh yet",
+            "periodic edges with a crack are not built on spectral elements of a Gmsh mesh \
+             yet (a crack reaching an edge would give it two nodes at one height)",
         ));
     }
     if spec.attenuation.is_some() {

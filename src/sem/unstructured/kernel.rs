@@ -177,6 +177,9 @@ impl UnstructuredSem {
         if let Some(&(d, _)) = self.springs.iter().find(|&&(d, _)| d >= n) {
             return Err(outside("springs", d));
         }
+        if let Some(&(l, r)) = self.periodic.iter().find(|&&(l, r)| l.max(r) >= n) {
+            return Err(outside("periodic", l.max(r)));
+        }
         if let Some(w) = self.springs.windows(2).find(|w| w[0].0 >= w[1].0) {
             return Err(crate::error::Error::invalid(
                 "springs",
@@ -411,7 +414,7 @@ impl Discretisation for UnstructuredSem {
         &self.dashpots
     }
     fn periodic_ties(&self) -> &[(usize, usize)] {
-        &[]
+        &self.periodic
     }
     fn workspace(&self) -> UnstructuredWorkspace {
         UnstructuredSem::workspace(self)

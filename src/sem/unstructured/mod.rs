@@ -44,6 +44,9 @@ pub struct UnstructuredSem {
     pub fixed_dofs: Vec<usize>,
     /// (DOF, c) of dashpots (none unless set, see [`UnstructuredSem::lysmer_dashpots`]).
     pub dashpots: Vec<(usize, f64)>,
+    /// (left DOF, right DOF) of periodic left and right edges, which move as one (none
+    /// unless set, see [`crate::fem::periodic_ties`]).
+    pub periodic: Vec<(usize, usize)>,
     /// (DOF, k) of the diagonal springs of viscous-spring edges (none unless set, see
     /// [`UnstructuredSem::viscous_springs`]), added to K u; sorted by DOF, each DOF once.
     pub springs: Vec<(usize, f64)>,
@@ -119,6 +122,7 @@ impl UnstructuredSem {
             fixed_dofs: Vec::new(),
             dashpots: Vec::new(),
             springs: Vec::new(),
+            periodic: Vec::new(),
             derivative: gll.derivative.iter().flatten().copied().collect(),
             gll,
             global,
