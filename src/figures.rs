@@ -213,7 +213,8 @@ fn snapshot_titled(
 
 /// The field the crack scatters: a snapshot of the cracked scene minus the same snapshot of
 /// its crack-tied companion (same mesh and step, same source), on the cracked mesh. Nodes
-/// of the lower crack face take the companion's value at their upper-face twin. Shows the
+/// of the lower crack face take the companion's value at their upper-face twin (on a cut
+/// Gmsh mesh, whose companion is the uncut mesh: at the uncut mesh's node). Shows the
 /// crack as a new source (report Fig. 19 and Sec. 5.2's "virtual transducer").
 pub fn scattered_snapshot(
     path: &Path,
@@ -225,19 +226,20 @@ pub fn scattered_snapshot(
     let crack = cracked
         .crack()
         .ok_or_else(|| Error::invalid("scene", "uncracked", "has no crack to scatter from"))?;
-    if matches!(cracked.body, crate::scene::Body::Unstructured { .. }) {
-        return Err(FigureError::Data(Error::invalid(
-            "scene",
-            "a Gmsh mesh on spectral elements",
-            "its crack-tied companion is the uncut mesh, numbered apart from the cut one: \
-             the scattered field is not drawn for it yet (compare receivers instead)",
-        )));
-    }
     let tied_nodes = tied.displacement.len() / 2;
-    let mut twin: Vec<usize> = (0..cracked.mesh().nodes.len()).collect();
-    for p in &crack.pairs {
-        twin[p.slave] = p.master;
-    }
+    let twin: Vec<usize> = match &cracked.body {
+        // the companion is the uncut mesh, numbered apart
+        crate::scene::Body::Unstructured { model, .. } => {
+            model.uncut_node.clone().unwrap_or_default()
+        }
+        _ => {
+            let mut twin: Vec<usize> = (0..cracked.mesh().nodes.len()).collect();
+            for p in &crack.pairs {
+                twin[p.slave] = p.master;
+            }
+            twin
+        }
+    };
     if twin.iter().any(|&n| n >= tied_nodes) || (snap.time_s - tied.time_s).abs() > 1e-12 {
         return Err(FigureError::Data(Error::invalid(
             "uncracked run",

@@ -55,6 +55,9 @@ pub struct UnstructuredSem {
     /// The crack's GLL node pairs, each in its own frame (none unless built by
     /// [`UnstructuredSem::cracked`]).
     pub crack: Option<Crack>,
+    /// For a cut model, the node of the uncut mesh's model (the crack-tied companion) at
+    /// each of its nodes: both faces of a pair map to one node.
+    pub uncut_node: Option<Vec<usize>>,
     gll: Gll,
     /// D[i * n + k] = l_k'(x_i), the GLL derivative matrix (n = p + 1).
     derivative: Vec<f64>,
@@ -131,6 +134,7 @@ impl UnstructuredSem {
             elements: mesh.elements.len(),
             mesh,
             crack: None,
+            uncut_node: None,
             materials,
             incidence_start,
             incidence,
@@ -153,6 +157,12 @@ impl UnstructuredSem {
         let (cut, sides) = checked.cut(segments)?;
         let mut model = UnstructuredSem::new(&cut, materials, order)?;
         model.crack = Some(model.crack_pairs(&sides));
+        // the elements are the same in both meshes: their points name the uncut node
+        let mut uncut_node = vec![0; model.positions_m.len()];
+        for (&g, u) in model.global.iter().zip(number_points(&checked, order)?) {
+            uncut_node[g] = u;
+        }
+        model.uncut_node = Some(uncut_node);
         Ok(model)
     }
 
