@@ -507,3 +507,39 @@ impl ContactSolver {
 /// Most augmented-Lagrangian iterations a step may take (the iteration converges in a few
 /// at the optimal penalty; a larger cap only turns a diverging setup into a hang).
 pub const MAX_AL_ITERATIONS: usize = 10_000;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn crack(normal: [f64; 2]) -> Crack {
+        Crack {
+            pieces_m: vec![],
+            pairs: vec![CrackPair {
+                master: 0,
+                slave: 1,
+                normal,
+            }],
+        }
+    }
+
+    /// An inclined pair whose DOFs move differently along x and y (here the slave's x held)
+    /// is refused, naming its nodes; the same pair level, or with equal compliances, is
+    /// taken, and its normal and tangential compliances are D_s + D_m.
+    #[test]
+    fn an_inclined_pair_on_a_held_dof_is_refused() {
+        let (held, free) = ([1.0, 1.0, 0.0, 1.0], [1.0, 1.0, 1.0, 1.0]);
+        let options = ContactOptions::default();
+        let inclined = [-0.6, 0.8];
+        let e = ContactSolver::new(&crack(inclined), &held, options, 1, 1.0)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(e.contains("nodes 0 and 1") && e.contains("inclined"), "{e}");
+        assert!(ContactSolver::new(&crack([0.0, 1.0]), &held, options, 1, 1.0).is_ok());
+        let solver = ContactSolver::new(&crack(inclined), &free, options, 1, 1.0).unwrap();
+        let p = &solver.pairs[0];
+        assert!((p.d_normal - 2.0).abs() < 1e-15 && (p.d_tangent - 2.0).abs() < 1e-15);
+        assert_eq!(p.tangent, [0.8, 0.6]);
+    }
+}
