@@ -112,12 +112,9 @@ impl CircularHole {
         let incident_p = Radial::bessel(alpha, a, terms, false);
         let scattered_p = Radial::bessel(alpha, a, terms, true);
         let scattered_s = Radial::bessel(beta, a, terms, true);
-        let i = Complex64::i();
         (0..terms)
             .map(|n| {
-                let eps = if n == 0 { 1.0 } else { 2.0 };
-                let amplitude = i / alpha * eps * (-i).powu(n as u32);
-                let fi = incident_p.at(n).scale(amplitude);
+                let fi = incident_p.at(n).scale(incident_amplitude(alpha, n));
                 let (rr_i, rt_i) = self.tractions(n, a, alpha, fi, Radial::ZERO, beta);
                 let (rr_a, rt_a) =
                     self.tractions(n, a, alpha, scattered_p.at(n), Radial::ZERO, beta);
@@ -195,32 +192,46 @@ impl CircularHole {
     /// incident wave in series too: sigma_rr = 0 there, so sigma_thetatheta = lambda div u +
     /// 2 mu e_thetatheta, div u = -alpha^2 phi, e_thetatheta = (u_r + du_theta/dtheta) / a.
     pub fn hoop_stress_per_incident_strain(&self, omega: f64, theta: f64) -> Complex64 {
+        let alpha = self.wavenumbers(omega).0;
+        let a = self.radius_m;
+        let mut sigma = Complex64::new(0.0, 0.0);
+        for (n, term) in self.on_the_hole(omega).into_iter().enumerate() {
+            let (f, g, nf) = (term.p, term.s, n as f64);
+            let e_tt = ((f.d + nf * g.v / a) - nf * (nf * f.v / a + g.d)) / a;
+            sigma += (-self.lambda_pa * alpha * alpha * f.v + 2.0 * self.mu_pa * e_tt)
+                * (nf * theta).cos();
+        }
+        sigma / (-Complex64::i() * alpha)
+    }
+
+    /// The terms of the field on the hole (r = a) at `omega`, the incident wave in series:
+    /// per n, the incident P radial function f_i of (H3), the total f_i + A_n H_n(alpha a)
+    /// and the S one B_n H_n(beta a), with their r-derivatives.
+    fn on_the_hole(&self, omega: f64) -> Vec<HoleTerm> {
         let (alpha, beta) = self.wavenumbers(omega);
         let a = self.radius_m;
         let terms = self.terms(omega, a);
-        let coefficients = self.coefficients(omega, terms);
         let (jp, hp, hs) = (
             Radial::bessel(alpha, a, terms, false),
             Radial::bessel(alpha, a, terms, true),
             Radial::bessel(beta, a, terms, true),
         );
-        let i = Complex64::i();
-        let mut sigma = Complex64::new(0.0, 0.0);
-        for (n, [ca, cb]) in coefficients.iter().enumerate() {
-            let eps = if n == 0 { 1.0 } else { 2.0 };
-            let fi = jp.at(n).scale(i / alpha * eps * (-i).powu(n as u32));
-            let fs = hp.at(n).scale(*ca);
-            let f = RadialValue {
-                v: fi.v + fs.v,
-                d: fi.d + fs.d,
-            };
-            let g = hs.at(n).scale(*cb);
-            let nf = n as f64;
-            let e_tt = ((f.d + nf * g.v / a) - nf * (nf * f.v / a + g.d)) / a;
-            sigma += (-self.lambda_pa * alpha * alpha * f.v + 2.0 * self.mu_pa * e_tt)
-                * (nf * theta).cos();
-        }
-        sigma / (-i * alpha)
+        self.coefficients(omega, terms)
+            .into_iter()
+            .enumerate()
+            .map(|(n, [ca, cb])| {
+                let incident = jp.at(n).scale(incident_amplitude(alpha, n));
+                let scattered = hp.at(n).scale(ca);
+                HoleTerm {
+                    incident,
+                    p: RadialValue {
+                        v: incident.v + scattered.v,
+                        d: incident.d + scattered.d,
+                    },
+                    s: hs.at(n).scale(cb),
+                }
+            })
+            .collect()
     }
 
     /// The displacement histories (u_x, u_y) at `points` for the incident displacement
@@ -298,6 +309,20 @@ impl CircularHole {
             })
             .collect())
     }
+}
+
+/// The incident wave's term n of (H3) per unit incident displacement: (i / alpha) eps_n
+/// (-i)^n.
+fn incident_amplitude(alpha: f64, n: usize) -> Complex64 {
+    let eps = if n == 0 { 1.0 } else { 2.0 };
+    Complex64::i() / alpha * eps * (-Complex64::i()).powu(n as u32)
+}
+
+/// One term of the field on the hole ([`CircularHole::on_the_hole`]).
+struct HoleTerm {
+    incident: RadialValue,
+    p: RadialValue,
+    s: RadialValue,
 }
 
 /// Z_n(k r) and its r-derivative k Z_n'(k r), n < terms, for Z = J or Z = H = J - i Y.
@@ -404,24 +429,9 @@ mod tests {
             let cp = ((hole.lambda_pa + 2.0 * hole.mu_pa) / hole.density_kg_m3).sqrt();
             let omega = alpha_a * cp / a;
             let (alpha, beta) = hole.wavenumbers(omega);
-            let terms = hole.terms(omega, a);
-            let c = hole.coefficients(omega, terms);
-            let (jp, hp, hs) = (
-                Radial::bessel(alpha, a, terms, false),
-                Radial::bessel(alpha, a, terms, true),
-                Radial::bessel(beta, a, terms, true),
-            );
-            let i = Complex64::i();
-            for (n, [ca, cb]) in c.iter().enumerate() {
-                let eps = if n == 0 { 1.0 } else { 2.0 };
-                let fi = jp.at(n).scale(i / alpha * eps * (-i).powu(n as u32));
-                let fs = hp.at(n).scale(*ca);
-                let f = RadialValue {
-                    v: fi.v + fs.v,
-                    d: fi.d + fs.d,
-                };
-                let (rr, rt) = hole.tractions(n, a, alpha, f, hs.at(n).scale(*cb), beta);
-                let (scale_rr, _) = hole.tractions(n, a, alpha, fi, Radial::ZERO, beta);
+            for (n, term) in hole.on_the_hole(omega).into_iter().enumerate() {
+                let (rr, rt) = hole.tractions(n, a, alpha, term.p, term.s, beta);
+                let (scale_rr, _) = hole.tractions(n, a, alpha, term.incident, Radial::ZERO, beta);
                 let scale = scale_rr.norm().max(alpha * alpha);
                 assert!(rr.norm() < 1e-9 * scale, "alpha a {alpha_a}, n {n}: {rr}");
                 if n > 0 {
