@@ -13,13 +13,11 @@
 //! displacement spectrum peaking at 0.38 MHz: alpha a = 0.9, beta a = 2.2 there; 0.2% of
 //! the peak left above 1.5 MHz).
 
+mod common;
+
+use common::{epoxy, gmsh_mesh, plane_wave_scene, rel_l2};
 use trnews::exact::hole::CircularHole;
-use trnews::material::{Orthotropic, Plane};
-use trnews::mesh::Side;
-use trnews::scene::{
-    Absorber, EdgeCondition, EdgeConditions, GmshSpec, MaterialSpec, ReceiverAt, ReceiverSpec,
-    Scene, SceneSpec, SourceSpec,
-};
+use trnews::scene::{ReceiverAt, ReceiverSpec, Scene, SceneSpec};
 use trnews::signal::Signal;
 use trnews::solve::RunConfig;
 
@@ -41,10 +39,6 @@ const RECEIVERS: [(f64, f64); 6] = [
     (2.5, 90.0),
 ];
 
-fn epoxy() -> trnews::material::Material {
-    Orthotropic::epoxy().reduce(Plane::Strain).unwrap()
-}
-
 /// The receivers in scene coordinates: the incident direction x' is -y, y' = x.
 fn scene_points() -> Vec<(f64, f64)> {
     RECEIVERS
@@ -61,36 +55,8 @@ fn scene_points() -> Vec<(f64, f64)> {
 
 /// The scene on spectral elements of `order`, recording `component` (0: u_x, 1: u_y).
 fn spec(order: usize, component: usize) -> SceneSpec {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts/gmsh_hole.msh");
     SceneSpec {
-        gmsh: Some(GmshSpec {
-            path: path.to_string_lossy().into(),
-            materials: [("1".to_string(), MaterialSpec::Preset("epoxy".into()))]
-                .into_iter()
-                .collect(),
-            crack_line: None,
-            contact: None,
-            tied: false,
-            order: Some(order),
-            angles_deg: Default::default(),
-            bytes: None,
-        }),
-        edges: EdgeConditions {
-            bottom: Some(EdgeCondition::Absorbing),
-            top: Some(EdgeCondition::Free),
-            left: Some(EdgeCondition::Roller),
-            right: Some(EdgeCondition::Roller),
-        },
-        absorbing: vec![],
-        absorber: Absorber::Dashpot,
-        transducer: None,
-        crack: None,
-        sources: vec![SourceSpec::Normal {
-            edge: Side::Top,
-            x_m: None,
-            depth_m: None,
-            scale: 1.0,
-        }],
+        gmsh: Some(gmsh_mesh("gmsh_hole.msh", &[("1", "epoxy")], Some(order))),
         receivers: ReceiverSpec {
             x_m: vec![],
             component,
@@ -105,7 +71,7 @@ fn spec(order: usize, component: usize) -> SceneSpec {
                 .collect(),
             ..Default::default()
         },
-        ..Default::default()
+        ..plane_wave_scene()
     }
 }
 
@@ -187,13 +153,6 @@ fn exact(dt: f64, n: usize) -> [Vec<Vec<f64>>; 2] {
     ]
 }
 
-/// Relative L2 distance of `a` from `reference`.
-fn relative_error(a: &[f64], reference: &[f64]) -> f64 {
-    let d: f64 = a.iter().zip(reference).map(|(x, y)| (x - y).powi(2)).sum();
-    let r: f64 = reference.iter().map(|y| y * y).sum();
-    (d / r).sqrt()
-}
-
 /// The errors of one order's traces: (component, receiver, relative L2 error) where the
 /// series' trace is not zero by symmetry, and the largest |u_x| on the incident axis (zero
 /// by symmetry) as a fraction of the largest trace; printed with the run's cost.
@@ -213,7 +172,7 @@ fn errors(order: usize) -> (Vec<(usize, usize, f64)>, f64) {
             if peak(&reference[c][k]) < 1e-12 * largest {
                 off_axis = off_axis.max(peak(&t.samples) / largest);
             } else {
-                out.push((c, k, relative_error(&t.samples, &reference[c][k])));
+                out.push((c, k, rel_l2(&t.samples, &reference[c][k])));
             }
         }
     }

@@ -5,6 +5,8 @@
 
 mod common;
 
+use common::{gmsh_mesh, plane_wave_scene};
+
 use trnews::material::{Material, Plane};
 use trnews::mesh::Side;
 use trnews::scene::{
@@ -74,28 +76,17 @@ fn spec(h: f64, sides: EdgeCondition) -> SceneSpec {
         width_m: WIDTH,
         element_size_x_m: h,
         element_size_y_m: h,
-        absorbing: vec![],
         edges: EdgeConditions {
-            bottom: Some(EdgeCondition::Absorbing),
-            top: Some(EdgeCondition::Free),
             left: Some(sides),
             right: Some(sides),
+            ..plane_wave_scene().edges
         },
-        absorber: Absorber::Dashpot,
-        transducer: None,
-        crack: None,
-        sources: vec![SourceSpec::Normal {
-            edge: Side::Top,
-            x_m: None,
-            depth_m: None,
-            scale: 1.0,
-        }],
         receivers: ReceiverSpec {
             x_m: vec![0.1e-3],
             at: at_points(&POINTS),
             ..Default::default()
         },
-        ..Default::default()
+        ..plane_wave_scene()
     }
 }
 
@@ -558,22 +549,10 @@ fn off_node_receivers_converge_like_the_nodal_solution_in_two_dimensions() {
     }
 }
 
-/// The Gmsh plate at `path` with fabric in its lower group (1) and epoxy in its upper (2),
-/// on spectral elements of `order` when given, on its triangles otherwise.
-fn gmsh_stack(path: &std::path::Path, order: Option<usize>) -> GmshSpec {
-    GmshSpec {
-        path: path.to_string_lossy().into(),
-        materials: [("1", "fabric_0_90"), ("2", "epoxy")]
-            .iter()
-            .map(|&(k, m)| (k.to_string(), MaterialSpec::Preset(m.into())))
-            .collect(),
-        crack_line: None,
-        contact: None,
-        tied: false,
-        order,
-        angles_deg: Default::default(),
-        bytes: None,
-    }
+/// The Gmsh plate `tests/scripts/<file>` with fabric in its lower group (1) and epoxy in
+/// its upper (2), on spectral elements of `order` when given, on its triangles otherwise.
+fn gmsh_stack(file: &str, order: Option<usize>) -> GmshSpec {
+    gmsh_mesh(file, &[("1", "fabric_0_90"), ("2", "epoxy")], order)
 }
 
 #[test]
@@ -585,10 +564,8 @@ fn a_gmsh_stack_carries_the_plane_wave_of_its_physical_groups() {
     // off by O(1). A 0.53 MHz Ricker (>= 17 elements per P wavelength up to 1.2 MHz) keeps
     // the discretisation error of the unstructured mesh (whose rollers hold the wave only
     // up to O(h^2), the mesh not being x-symmetric) at the measured 1.2-2.0%; bound 4%.
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts/gmsh_plate.msh");
     let mut spec = spec(H0, EdgeCondition::Roller);
-    spec.gmsh = Some(gmsh_stack(&path, None));
+    spec.gmsh = Some(gmsh_stack("gmsh_plate.msh", None));
     let points = [(2.0e-3, 1.2e-3), (2.0e-3, 2.0e-3), (1.7e-3, 0.5e-3)];
     spec.receivers = ReceiverSpec {
         x_m: vec![],
@@ -627,8 +604,6 @@ fn a_gmsh_stack_carries_the_plane_wave_of_its_physical_groups() {
 /// 5 below 5e-6 and at least 3x below order 3 at every receiver.
 #[test]
 fn a_gmsh_quadrilateral_stack_on_spectral_elements_carries_the_plane_wave() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/scripts/gmsh_quad_plate_unstructured.msh");
     let points = [(2.0e-3, 1.2e-3), (2.0e-3, 2.0e-3), (1.7e-3, 0.5e-3)];
     // centred late enough that the drive starts at 1e-6 of its peak, not 3e-4 (the test
     // above's pulse: its onset step alone is a 1.3e-4 floor at every order)
@@ -638,7 +613,7 @@ fn a_gmsh_quadrilateral_stack_on_spectral_elements_carries_the_plane_wave() {
     };
     let errors = |order: usize| -> Vec<f64> {
         let mut spec = spec(H0, EdgeCondition::Roller);
-        spec.gmsh = Some(gmsh_stack(&path, Some(order)));
+        spec.gmsh = Some(gmsh_stack("gmsh_quad_plate_unstructured.msh", Some(order)));
         spec.receivers = ReceiverSpec {
             x_m: vec![],
             at: at_points(&points),
@@ -680,7 +655,6 @@ fn a_gmsh_quadrilateral_stack_on_spectral_elements_carries_the_plane_wave() {
 /// `fem::tests::periodic_ties_name_columns_that_do_not_match`).
 #[test]
 fn periodic_sides_on_a_gmsh_quadrilateral_stack_carry_the_plane_wave() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts");
     let points = [(2.0e-3, 1.2e-3), (0.0, 2.0e-3), (1.7e-3, 0.5e-3)];
     let pulse = Ricker {
         t0: 2.5e-6,
@@ -688,7 +662,7 @@ fn periodic_sides_on_a_gmsh_quadrilateral_stack_carry_the_plane_wave() {
     };
     let stack = |sides: EdgeCondition, mesh: &str| {
         let mut spec = spec(H0, sides);
-        spec.gmsh = Some(gmsh_stack(&dir.join(mesh), Some(4)));
+        spec.gmsh = Some(gmsh_stack(mesh, Some(4)));
         spec.receivers = ReceiverSpec {
             x_m: vec![],
             at: at_points(&points),

@@ -13,7 +13,7 @@ use common::*;
 use trnews::contact::{ContactMethod, ContactOptions};
 use trnews::mesh::quad::{Quad, QuadMesh};
 use trnews::mesh::Side;
-use trnews::scene::{GmshSpec, MaterialSpec, ReceiverSpec, Scene, SceneSpec, SourceSpec};
+use trnews::scene::{GmshSpec, ReceiverSpec, Scene, SceneSpec, SourceSpec};
 use trnews::sem::unstructured::UnstructuredSem;
 use trnews::signal::Signal;
 use trnews::solve::{run_on, Quantity, Receiver, RunConfig, RunOutput, Source};
@@ -200,23 +200,15 @@ fn a_turned_pushed_block_slides_at_coulomb_deceleration_or_sticks() {
 /// 4 x 2 mm epoxy plate of 209 curved elements conforming to a crack from (1.5, 0.7) to
 /// (2.5, 1.3) mm, tips inside) as a scene on spectral elements of order 4.
 fn inclined_crack_scene(tied: bool) -> Scene {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts/gmsh_quad_crack.msh");
     let spec = SceneSpec {
         gmsh: Some(GmshSpec {
-            path: path.to_string_lossy().into(),
-            materials: [("1".to_string(), MaterialSpec::Preset("epoxy".into()))]
-                .into_iter()
-                .collect(),
             crack_line: Some(5),
             contact: Some(ContactOptions {
                 friction: 0.6,
                 ..Default::default()
             }),
             tied,
-            order: Some(4),
-            angles_deg: Default::default(),
-            bytes: None,
+            ..gmsh_mesh("gmsh_quad_crack.msh", &[("1", "epoxy")], Some(4))
         }),
         crack: None,
         transducer: None,

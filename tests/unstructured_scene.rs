@@ -3,6 +3,9 @@
 //! stiffness, loads, receivers, dashpots and springs built by the unstructured path agree
 //! with the structured one), the energy ledger closes, and refused inputs name the field.
 
+mod common;
+
+use common::gmsh_mesh;
 use trnews::contact::ContactOptions;
 use trnews::scene::{
     Body, CrackSpec, DiscretisationSpec, GmshSpec, LaminateSpec, LayerSpec, MaterialSpec,
@@ -11,13 +14,6 @@ use trnews::scene::{
 use trnews::signal::relative_l2;
 use trnews::solve::RunConfig;
 use trnews::trnews::TrNewsSpec;
-
-fn plate_path() -> String {
-    format!(
-        "{}/tests/scripts/gmsh_quad_plate.msh",
-        env!("CARGO_MANIFEST_DIR")
-    )
-}
 
 /// The plate's scene around its body: transmitter on the right edge, three receivers on
 /// top, the default viscous-spring edges (bottom and left) and transducer band, no crack.
@@ -65,19 +61,11 @@ fn layered(order: usize) -> SceneSpec {
 /// The same plate read from tests/scripts/gmsh_quad_plate.msh (written by gmsh_quads.py).
 fn from_gmsh(order: usize) -> SceneSpec {
     SceneSpec {
-        gmsh: Some(GmshSpec {
-            path: plate_path(),
-            materials: [("1", "fabric_0_90"), ("2", "epoxy")]
-                .iter()
-                .map(|&(k, m)| (k.to_string(), MaterialSpec::Preset(m.into())))
-                .collect(),
-            crack_line: None,
-            contact: None,
-            tied: false,
-            order: Some(order),
-            angles_deg: Default::default(),
-            bytes: None,
-        }),
+        gmsh: Some(gmsh_mesh(
+            "gmsh_quad_plate.msh",
+            &[("1", "fabric_0_90"), ("2", "epoxy")],
+            Some(order),
+        )),
         ..around()
     }
 }

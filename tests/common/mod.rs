@@ -464,3 +464,56 @@ pub fn plane_wave_in_stack(
         })
         .collect()
 }
+
+/// The plane-wave set-up of the stack tests: a uniform normal traction on the top edge
+/// (scale 1: the drive is sigma_yy there), roller sides, a dashpot bottom, no transducer,
+/// no crack; the rest as `SceneSpec::default()`.
+pub fn plane_wave_scene() -> trnews::scene::SceneSpec {
+    use trnews::scene::{Absorber, EdgeCondition, EdgeConditions, SceneSpec, SourceSpec};
+    SceneSpec {
+        absorbing: vec![],
+        edges: EdgeConditions {
+            bottom: Some(EdgeCondition::Absorbing),
+            top: Some(EdgeCondition::Free),
+            left: Some(EdgeCondition::Roller),
+            right: Some(EdgeCondition::Roller),
+        },
+        absorber: Absorber::Dashpot,
+        transducer: None,
+        crack: None,
+        sources: vec![SourceSpec::Normal {
+            edge: Side::Top,
+            x_m: None,
+            depth_m: None,
+            scale: 1.0,
+        }],
+        ..Default::default()
+    }
+}
+
+/// The Gmsh mesh `tests/scripts/<file>` with material presets by physical surface group
+/// (`(tag, preset)`), on spectral elements of `order` (its triangles when `None`), uncracked.
+pub fn gmsh_mesh(
+    file: &str,
+    materials: &[(&str, &str)],
+    order: Option<usize>,
+) -> trnews::scene::GmshSpec {
+    use trnews::scene::{GmshSpec, MaterialSpec};
+    GmshSpec {
+        path: Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/scripts")
+            .join(file)
+            .to_string_lossy()
+            .into(),
+        materials: materials
+            .iter()
+            .map(|&(k, m)| (k.to_string(), MaterialSpec::Preset(m.into())))
+            .collect(),
+        crack_line: None,
+        contact: None,
+        tied: false,
+        order,
+        angles_deg: Default::default(),
+        bytes: None,
+    }
+}
