@@ -124,6 +124,22 @@ def unstructured_plate():
 unstructured_plate()
 
 
+def write_curved_quads(name):
+    """Meshes the model as 9-node quadrilaterals (frontal-Delaunay for quads, recombined),
+    writes it to `name` (MSH 4.1) with its element counts printed, and closes Gmsh."""
+    gmsh.option.setNumber("Mesh.RecombineAll", 1)
+    gmsh.option.setNumber("Mesh.Algorithm", 8)
+    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.model.mesh.generate(2)
+    gmsh.model.mesh.setOrder(2)
+    types, tags, _ = gmsh.model.mesh.getElements(2)
+    counts = {gmsh.model.mesh.getElementProperties(t)[0]: len(k) for t, k in zip(types, tags)}
+    print(name + ":", counts)
+    gmsh.write(name)
+    gmsh.finalize()
+
+
 def hole_plate():
     """gmsh_hole.msh: a 36 mm x 36 mm square of one material (physical surface 1) with a
     circular hole of radius 1 mm at its centre, 9-node quadrilaterals (curved on the hole)
@@ -154,16 +170,7 @@ def hole_plate():
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
-    gmsh.option.setNumber("Mesh.RecombineAll", 1)
-    gmsh.option.setNumber("Mesh.Algorithm", 8)
-    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
-    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-    gmsh.model.mesh.generate(2)
-    gmsh.model.mesh.setOrder(2)
-    types, tags, _ = gmsh.model.mesh.getElements(2)
-    print("hole plate:", {gmsh.model.mesh.getElementProperties(t)[0]: len(k) for t, k in zip(types, tags)})
-    gmsh.write("gmsh_hole.msh")
-    gmsh.finalize()
+    write_curved_quads("gmsh_hole.msh")
 
 
 hole_plate()
@@ -190,16 +197,7 @@ def cracked_plate():
               if gmsh.model.getBoundingBox(1, c)[0] > 1e-3 and gmsh.model.getBoundingBox(1, c)[3] < 3e-3]
     gmsh.model.addPhysicalGroup(1, inside, 5)
     gmsh.option.setNumber("Mesh.MeshSizeMax", 0.2e-3)
-    gmsh.option.setNumber("Mesh.RecombineAll", 1)
-    gmsh.option.setNumber("Mesh.Algorithm", 8)
-    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
-    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-    gmsh.model.mesh.generate(2)
-    gmsh.model.mesh.setOrder(2)
-    types, tags, _ = gmsh.model.mesh.getElements(2)
-    print("cracked plate:", {gmsh.model.mesh.getElementProperties(t)[0]: len(k) for t, k in zip(types, tags)})
-    gmsh.write("gmsh_quad_crack.msh")
-    gmsh.finalize()
+    write_curved_quads("gmsh_quad_crack.msh")
 
 
 cracked_plate()
