@@ -90,8 +90,8 @@ fn push(angle: f64, p_n: f64, p_t: f64, friction: f64) -> (RunOutput, f64, Unstr
     for e in 2 * COLUMNS..3 * COLUMNS {
         for (i, w) in weights_1d.iter().enumerate() {
             let node = m.node(e, i, ORDER);
-            for k in 0..2 {
-                *load.entry(2 * node + k).or_default() += w * half * push[k] / magnitude;
+            for (k, p) in push.iter().enumerate() {
+                *load.entry(2 * node + k).or_default() += w * half * p / magnitude;
             }
         }
     }

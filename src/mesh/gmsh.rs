@@ -269,7 +269,8 @@ fn line_ends(msh: &Msh, group: i32, kinds: &[mshio::ElementType]) -> Result<Vec<
         .flat_map(|e| &e.element_blocks)
         .filter(|b| kinds.contains(&b.element_type) && curves.contains(&b.entity_tag))
         .flat_map(|b| &b.elements)
-        .filter_map(|e| (e.nodes.len() >= 2).then(|| [e.nodes[0], e.nodes[1]]))
+        .filter(|e| e.nodes.len() >= 2)
+        .map(|e| [e.nodes[0], e.nodes[1]])
         .collect();
     if ends.is_empty() {
         return Err(Error::Mesh(format!(

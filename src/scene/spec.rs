@@ -69,6 +69,13 @@ pub struct GmshSpec {
     /// (degrees), keyed as `materials`; 0 where not given. Spectral elements only.
     #[serde(default)]
     pub angles_deg: std::collections::BTreeMap<String, f64>,
+    /// Tags of physical lines that absorb as `absorber` says, on spectral elements (`order`):
+    /// any chain of boundary element sides, straight, inclined or curved, with dashpots and
+    /// springs in each point's own normal frame. The viscous-spring boundary's R, where
+    /// `absorber.source_distance_m` does not give it, is each point's distance from the
+    /// transmitter's centre. The bounding box's sides absorb as `absorbing` and `edges` say.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub absorbing_lines: Vec<i32>,
     /// The file's bytes when the caller has read it (scripts read it inside their sandbox);
     /// `None` reads `path`.
     #[serde(skip)]

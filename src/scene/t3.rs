@@ -54,6 +54,17 @@ fn gmsh_mesh(spec: &SceneSpec, g: &GmshSpec) -> Result<Built> {
             "a Gmsh scene takes its crack from gmsh.crack_line: set crack: ()",
         ));
     }
+    let on_quads = "is built on spectral elements only: set gmsh.order on a mesh of quadrilaterals";
+    if let Some(key) = g.angles_deg.keys().next() {
+        return Err(Error::invalid(
+            format!("gmsh.angles_deg.{key}"),
+            "given",
+            on_quads,
+        ));
+    }
+    if let Some(line) = g.absorbing_lines.first() {
+        return Err(Error::invalid("gmsh.absorbing_lines", line, on_quads));
+    }
     let bytes = gmsh_bytes(g)?;
     let (materials, groups) = gmsh_materials(spec, g)?;
     let mesh = crate::mesh::gmsh::read_msh(&bytes, &groups)

@@ -8,7 +8,7 @@ use super::build::{gmsh_bytes, gmsh_materials, group_tag, Region, BYTES_PER_NODE
 use super::edges::{absorbing_edges, edge_conditions, held_and_pinned_dofs, is_periodic};
 use super::sem::{stability, OnSem};
 use super::sources::{source_weights, transmitter_weights};
-use super::spec::EdgeCondition;
+use super::spec::{Absorber, EdgeCondition};
 use super::spec::{GmshSpec, SceneSpec};
 use super::{Body, Scene};
 use crate::error::{Error, Result};
@@ -16,7 +16,7 @@ use crate::laminate::Laminate;
 use crate::mesh::Mesh;
 use crate::mesh::Side;
 use crate::sem::unstructured::UnstructuredSem;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// The scene on spectral elements of `order` over `g`'s quadrilaterals.
 pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scene> {
@@ -72,11 +72,24 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
     };
     crate::budget::check()?;
     let conditions = edge_conditions(spec)?;
+    let lines = g
+        .absorbing_lines
+        .iter()
+        .map(|&group| {
+            crate::mesh::gmsh::read_line_sides(&bytes, group)
+                .map(|segments| (group, segments))
+                .map_err(|e| Error::invalid("gmsh.absorbing_lines", group, e.to_string()))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let edges = Edges {
+        conditions,
+        lines: &lines,
+    };
     let Constrained {
         model,
         nodes,
         region,
-    } = constrain(spec, &conditions, model)?;
+    } = constrain(spec, &edges, model)?;
     let on = OnSem {
         model: &model,
         nodes: &nodes,
@@ -88,7 +101,7 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
     };
     let receivers = super::build_receivers(&on, &spec.receivers, region.height)?;
     let stability = match cracked {
-        Some(c) => stability(&constrain(spec, &conditions, c)?.model),
+        Some(c) => stability(&constrain(spec, &edges, c)?.model),
         None => stability(&model),
     };
     Ok(Scene {
@@ -113,13 +126,19 @@ struct Constrained {
     region: Region,
 }
 
-/// `model` with the scene's fixed DOFs, dashpots and viscous springs on its bounding box's
-/// edges (a crack's faces each get theirs: they are picked by position).
-fn constrain(
-    spec: &SceneSpec,
-    conditions: &[(Side, EdgeCondition); 4],
-    mut model: UnstructuredSem,
-) -> Result<Constrained> {
+/// The edge conditions of the bounding box's sides, and the absorbing lines (physical
+/// group, its segments).
+struct Edges<'a> {
+    conditions: [(Side, EdgeCondition); 4],
+    lines: &'a [(i32, Vec<[usize; 2]>)],
+}
+
+/// `model` with the scene's fixed DOFs, and dashpots and viscous springs on its bounding
+/// box's absorbing sides and on its absorbing lines (a crack's faces each get theirs: they
+/// are picked by position). A boundary side absorbing twice (a line along an absorbing
+/// side, or in two lines) is an error naming the line.
+fn constrain(spec: &SceneSpec, edges: &Edges, mut model: UnstructuredSem) -> Result<Constrained> {
+    let conditions = &edges.conditions;
     let nodes = node_triangles(&model);
     let (x0, x1, y0, y1) = model.bounds();
     let region = Region {
@@ -136,18 +155,48 @@ fn constrain(
         model.periodic = crate::fem::periodic_ties(&nodes, &mut fixed)?;
     }
     model.fixed_dofs = fixed;
-    let sides: Vec<_> = absorbing.iter().map(|a| a.side).collect();
-    model.dashpots = model.lysmer_dashpots(&sides);
-    // one spring per DOF, sorted (a corner shared by two viscous-spring edges sums both)
-    let mut springs = std::collections::BTreeMap::<usize, f64>::new();
+    let mut points = Vec::new();
+    // each spring point with its R: its side's, or its distance from the transmitter
+    let mut spring_points = Vec::new();
     for edge in &absorbing {
+        let side = model.side_points(edge.side);
         if let Some(r) = edge.spring_distance_m {
-            for (d, k) in model.viscous_springs(edge.side, r)? {
-                *springs.entry(d).or_default() += k;
-            }
+            spring_points.extend(side.iter().map(|&p| (p, r)));
         }
+        points.extend(side);
     }
-    model.springs = springs.into_iter().collect();
+    let centre = super::sources::source_centre(spec, &nodes, region);
+    let source = [x0 + centre[0], y0 + centre[1]];
+    let mut absorbs: HashSet<_> = points.iter().map(|p| (p.element, p.side)).collect();
+    for (group, segments) in edges.lines {
+        let line = model
+            .line_points(segments)
+            .map_err(|e| Error::invalid("gmsh.absorbing_lines", group, e.to_string()))?;
+        if let Some(p) = line.iter().find(|p| absorbs.contains(&(p.element, p.side))) {
+            return Err(Error::invalid(
+                "gmsh.absorbing_lines",
+                group,
+                format!(
+                    "absorbs twice at node {} (it runs along an absorbing side or another \
+                     absorbing line)",
+                    p.node
+                ),
+            ));
+        }
+        absorbs.extend(line.iter().map(|p| (p.element, p.side)));
+        if let Absorber::ViscousSpring { source_distance_m } = spec.absorber {
+            spring_points.extend(line.iter().map(|&p| {
+                let x = model.positions_m[p.node];
+                let r =
+                    source_distance_m.unwrap_or_else(|| (x[0] - source[0]).hypot(x[1] - source[1]));
+                (p, r)
+            }));
+        }
+        points.extend(line);
+    }
+    model.dashpots = model.lysmer_dashpots(&points);
+    model.springs = model.viscous_springs(&spring_points)?;
+    model.check()?;
     Ok(Constrained {
         model,
         nodes,

@@ -6,6 +6,7 @@ use super::SemModel;
 use crate::error::{Error, Result};
 use crate::fem::{VISCOUS_SPRING_ALPHA_N, VISCOUS_SPRING_ALPHA_T};
 use crate::mesh::Side;
+use crate::solve::NodeBlock;
 use std::collections::BTreeMap;
 
 impl SemModel {
@@ -124,20 +125,20 @@ impl SemModel {
 /// A GLL point on a straight side along x or y: its node, the DOF component normal to the
 /// side, its edge weight w (m), and the density and the normal (C_11 or C_22) and shear
 /// (C_33) moduli of the element its weight comes from.
-pub(crate) struct SidePoint {
-    pub node: usize,
-    pub normal: usize,
-    pub weight: f64,
-    pub density_kg_m3: f64,
-    pub c_normal_pa: f64,
-    pub c_shear_pa: f64,
+struct SidePoint {
+    node: usize,
+    normal: usize,
+    weight: f64,
+    density_kg_m3: f64,
+    c_normal_pa: f64,
+    c_shear_pa: f64,
 }
 
 /// Adds the Lysmer-Kuhlemeyer dashpots of `points` to `c` (per DOF): rho V_n w on the
 /// normal DOF and rho V_s w on the tangential one, rho V = sqrt(rho C) with V_n =
 /// sqrt(C_nn / rho), V_s = sqrt(C_33 / rho) (report Sec. 4.6; the impedances of waves
 /// crossing the side at normal incidence).
-pub(crate) fn side_dashpots(c: &mut BTreeMap<usize, f64>, points: &[SidePoint]) {
+fn side_dashpots(c: &mut BTreeMap<usize, f64>, points: &[SidePoint]) {
     for p in points {
         let (n, t) = (2 * p.node + p.normal, 2 * p.node + 1 - p.normal);
         *c.entry(n).or_default() += (p.density_kg_m3 * p.c_normal_pa).sqrt() * p.weight;
@@ -145,10 +146,46 @@ pub(crate) fn side_dashpots(c: &mut BTreeMap<usize, f64>, points: &[SidePoint]) 
     }
 }
 
+/// The impedance matrix of plane waves crossing a line of unit normal `n`, Z = sqrt(rho
+/// Gamma(n)) (N s/m^3), for the plane stiffness `c` = (C11, C12, C13, C22, C23, C33) (Voigt,
+/// engineering shear) and density `density_kg_m3`. Gamma_ik = C_ijkl n_j n_l is the
+/// Christoffel matrix:
+///
+/// Gamma_xx = C11 n_x^2 + 2 C13 n_x n_y + C33 n_y^2,
+/// Gamma_yy = C33 n_x^2 + 2 C23 n_x n_y + C22 n_y^2,
+/// Gamma_xy = C13 n_x^2 + (C12 + C33) n_x n_y + C23 n_y^2.
+///
+/// A plane wave u = a g(t - n.x / V) with Gamma a = rho V^2 a puts the traction
+/// -rho V g' a = -Z u' on the line it leaves behind, so dashpots C = Z w absorb both waves
+/// at normal incidence in any anisotropic material. On a side along x or y of a material in
+/// its axes Z is diag(sqrt(rho C_nn), sqrt(rho C33)), [`side_dashpots`]'s. The square root
+/// of the symmetric positive definite A is (A + sqrt(det A) I) / sqrt(tr A + 2 sqrt(det A)).
+pub(crate) fn impedance(c: [f64; 6], density_kg_m3: f64, n: [f64; 2]) -> NodeBlock {
+    let [c11, c12, c13, c22, c23, c33] = c;
+    let (xx, xy, yy) = (n[0] * n[0], n[0] * n[1], n[1] * n[1]);
+    let gamma = [
+        [
+            c11 * xx + 2.0 * c13 * xy + c33 * yy,
+            c13 * xx + (c12 + c33) * xy + c23 * yy,
+        ],
+        [
+            c13 * xx + (c12 + c33) * xy + c23 * yy,
+            c33 * xx + 2.0 * c23 * xy + c22 * yy,
+        ],
+    ]
+    .map(|row| row.map(|g| density_kg_m3 * g));
+    let root_det = (gamma[0][0] * gamma[1][1] - gamma[0][1] * gamma[1][0]).sqrt();
+    let scale = (gamma[0][0] + gamma[1][1] + 2.0 * root_det).sqrt();
+    [
+        [(gamma[0][0] + root_det) / scale, gamma[0][1] / scale],
+        [gamma[1][0] / scale, (gamma[1][1] + root_det) / scale],
+    ]
+}
+
 /// The springs of a viscous-spring edge through `points` (Liu et al. 2006): per DOF,
 /// k_N = ALPHA_N G w / R on the normal one and k_T = ALPHA_T G w / R on the tangential one,
 /// G = C_33, R = `distance_m` from the wave source. Sorted by DOF; R must be positive.
-pub(crate) fn side_springs(points: &[SidePoint], distance_m: f64) -> Result<Vec<(usize, f64)>> {
+fn side_springs(points: &[SidePoint], distance_m: f64) -> Result<Vec<(usize, f64)>> {
     if !(distance_m.is_finite() && distance_m > 0.0) {
         return Err(Error::invalid(
             "absorber.source_distance_m",
@@ -178,4 +215,56 @@ fn containing(lines: &[f64], v: f64) -> Option<usize> {
             .saturating_sub(1)
             .min(lines.len() - 2),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::{Orthotropic, Plane};
+
+    fn stiffness(m: &crate::material::Material) -> [f64; 6] {
+        let c = m.stiffness_pa;
+        [c[0][0], c[0][1], c[0][2], c[1][1], c[1][2], c[2][2]]
+    }
+
+    /// Z^2 = rho Gamma(n) with Z symmetric positive definite for a ply turned by 30 degrees
+    /// on an inclined line; in the material's axes Z is the diagonal of `side_dashpots`; for
+    /// an isotropic material it is rho V_p n n^T + rho V_s t t^T at any angle.
+    #[test]
+    fn impedance_is_the_root_of_rho_times_the_christoffel_matrix() {
+        let ply = Orthotropic::preset("fabric_0_90")
+            .unwrap()
+            .reduce(Plane::Strain)
+            .unwrap();
+        let rho = ply.density_kg_m3;
+        let turned = ply.rotated(30f64.to_radians());
+        let n = [0.6, 0.8];
+        let z = impedance(stiffness(&turned), rho, n);
+        let c = stiffness(&turned);
+        let gamma_xy = c[2] * n[0] * n[0] + (c[1] + c[5]) * n[0] * n[1] + c[4] * n[1] * n[1];
+        let squared = |i: usize, j: usize| z[i][0] * z[0][j] + z[i][1] * z[1][j];
+        assert!((squared(0, 1) - rho * gamma_xy).abs() < 1e-12 * rho * c[0]);
+        assert!((squared(0, 1) - squared(1, 0)).abs() < 1e-12 * rho * c[0]);
+        assert!(z[0][1] == z[1][0] && z[0][0] > 0.0 && z[0][0] * z[1][1] > z[0][1] * z[0][1]);
+        for (normal, n) in [(0, [1.0, 0.0]), (1, [0.0, -1.0])] {
+            let z = impedance(stiffness(&ply), rho, n);
+            let c = ply.stiffness_pa;
+            let along = (rho * c[normal][normal]).sqrt();
+            let across = (rho * c[2][2]).sqrt();
+            assert!((z[normal][normal] - along).abs() < 1e-13 * along);
+            assert!((z[1 - normal][1 - normal] - across).abs() < 1e-13 * along);
+            assert_eq!(z[0][1], 0.0);
+        }
+        let epoxy = Orthotropic::epoxy().reduce(Plane::Strain).unwrap();
+        let speeds = epoxy.wave_speeds();
+        let (rho, a) = (epoxy.density_kg_m3, 0.4f64);
+        let z = impedance(stiffness(&epoxy), rho, [a.cos(), a.sin()]);
+        let (n, t) = ([a.cos(), a.sin()], [-a.sin(), a.cos()]);
+        for i in 0..2 {
+            for j in 0..2 {
+                let exact = rho * (speeds.p_x_m_s * n[i] * n[j] + speeds.s_m_s * t[i] * t[j]);
+                assert!((z[i][j] - exact).abs() < 1e-12 * rho * speeds.p_x_m_s);
+            }
+        }
+    }
 }

@@ -15,7 +15,11 @@ use crate::mesh::Crack;
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
-/// A semi-discrete elastic body M u'' + C u' + K u = f with diagonal M and C.
+/// A symmetric 2x2 block on one node's (x, y) DOFs.
+pub type NodeBlock = [[f64; 2]; 2];
+
+/// A semi-discrete elastic body M u'' + C u' + K u = f with diagonal M, and C diagonal but
+/// for 2x2 blocks on single nodes.
 pub trait Discretisation: Sync {
     /// Scratch the stiffness product needs, allocated once per run.
     type Workspace: Send;
@@ -26,6 +30,12 @@ pub trait Discretisation: Sync {
     fn fixed_dofs(&self) -> &[usize];
     /// (DOF, damping coefficient c) of every dashpot (N s/m per m of thickness).
     fn dashpots(&self) -> &[(usize, f64)];
+    /// (node, C) of every coupled dashpot: a symmetric 2x2 block acting on the velocity of
+    /// the node's (x, y) DOFs, traction -C v (N s/m per m of thickness), as an absorbing
+    /// line at an angle to the axes has; none by default. A node has at most one.
+    fn coupled_dashpots(&self) -> &[(usize, NodeBlock)] {
+        &[]
+    }
     /// (left DOF, right DOF) pairs of periodic edges, which move as one.
     fn periodic_ties(&self) -> &[(usize, usize)];
     /// The scratch of [`Discretisation::stiffness_times`].

@@ -6,13 +6,14 @@
 //! the undamped, unforced update u_{n+1} = 2 u_n - u_{n-1} - (dt^2/m)(K u_n) for every DOF,
 //! then sparse corrections touch only what the scene has: source DOFs, periodic ties (each
 //! tied pair takes the mass-weighted mean of its two updates, the update of one DOF of mass
-//! m_l + m_r under the force f_l + f_r), dashpot DOFs, crack pairs. Fixed DOFs have
+//! m_l + m_r under the force f_l + f_r), dashpot DOFs and coupled dashpots' nodes, crack
+//! pairs. Fixed DOFs have
 //! dt^2/m = 0 and so never move. Nothing is allocated per step.
 //! The kernel is the discretisation's [`Discretisation::explicit_update`] (for T3: matrix-free
 //! stencils on structured meshes, the assembled K elsewhere; for spectral elements: sum
 //! factorisation); the contact law is a type parameter ([`ContactLaw`]).
 
-use super::discretisation::Discretisation;
+use super::discretisation::{Discretisation, NodeBlock};
 use super::ledger::Flows;
 use super::stepper::{EnergySample, Fields, Stepper, Velocity};
 use super::ContactLaw;
@@ -26,6 +27,8 @@ pub struct Coefficients {
     pub(super) a: Vec<f64>,
     /// (DOF, c, r = c dt / 2m) for every dashpot.
     pub(super) dashpots: Vec<(usize, f64, f64)>,
+    /// Every coupled dashpot's node and constants.
+    coupled: Vec<CoupledDashpot>,
     /// Compliance of the corrected update, dt^2 / (m (1 + r)): how far a unit force moves a
     /// DOF in one step (the contact solvers' D).
     pub compliance: Vec<f64>,
@@ -58,19 +61,88 @@ impl Coefficients {
         for &(d, _, r) in &dashpots {
             compliance[d] /= 1.0 + r;
         }
+        let coupled = coupled_dashpots(body, &a, &ties, dt);
         Coefficients {
             a,
             dashpots,
+            coupled,
             compliance,
             ties,
         }
     }
 }
 
+/// A coupled dashpot at step dt: its node, its block C (the rows and columns of fixed DOFs
+/// zeroed: they do not move) and (I + R)^-1 with R = (dt / 2) M^-1 C.
+#[derive(Clone, Copy, Debug)]
+struct CoupledDashpot {
+    node: usize,
+    c: NodeBlock,
+    r: NodeBlock,
+    inverse: NodeBlock,
+}
+
+/// The coupled dashpots of `body` at step `dt` (`a` = dt^2 / m, zero on fixed DOFs). A node
+/// tied to another moves with it as one node of mass M_l + M_r and damping C_l + C_r, so
+/// both get R = (dt / 2) (M_l + M_r)^-1 (C_l + C_r), each its own C for the absorbed energy
+/// (a tied node without a dashpot gets C = 0 and the shared R).
+fn coupled_dashpots(
+    body: &impl Discretisation,
+    a: &[f64],
+    ties: &[(usize, usize, f64)],
+    dt: f64,
+) -> Vec<CoupledDashpot> {
+    let m = body.lumped_mass();
+    let partner: std::collections::HashMap<usize, usize> = ties
+        .iter()
+        .filter(|t| t.0 % 2 == 0)
+        .flat_map(|&(l, r, _)| [(l / 2, r / 2), (r / 2, l / 2)])
+        .collect();
+    let mut c_of: std::collections::BTreeMap<usize, NodeBlock> = Default::default();
+    for &(node, c) in body.coupled_dashpots() {
+        let free = [a[2 * node] != 0.0, a[2 * node + 1] != 0.0];
+        let held = std::array::from_fn(|i| {
+            std::array::from_fn(|j| if free[i] && free[j] { c[i][j] } else { 0.0 })
+        });
+        c_of.insert(node, held);
+        if let Some(&p) = partner.get(&node) {
+            c_of.entry(p).or_insert([[0.0; 2]; 2]);
+        }
+    }
+    c_of.iter()
+        .map(|(&node, &c)| {
+            let (shared, mass): (NodeBlock, [f64; 2]) = match partner.get(&node) {
+                Some(&p) => (
+                    add(c, c_of[&p]),
+                    [0, 1].map(|i| m[2 * node + i] + m[2 * p + i]),
+                ),
+                None => (c, [m[2 * node], m[2 * node + 1]]),
+            };
+            let r: NodeBlock = std::array::from_fn(|i| shared[i].map(|v| 0.5 * dt * v / mass[i]));
+            let det = (1.0 + r[0][0]) * (1.0 + r[1][1]) - r[0][1] * r[1][0];
+            let inverse = [
+                [(1.0 + r[1][1]) / det, -r[0][1] / det],
+                [-r[1][0] / det, (1.0 + r[0][0]) / det],
+            ];
+            CoupledDashpot {
+                node,
+                c,
+                r,
+                inverse,
+            }
+        })
+        .collect()
+}
+
+fn add(x: NodeBlock, y: NodeBlock) -> NodeBlock {
+    std::array::from_fn(|i| std::array::from_fn(|j| x[i][j] + y[i][j]))
+}
+
 impl Coefficients {
     /// The dashpots' implicit correction of an explicit update `next` (the damping term
-    /// C (u_{n+1} - u_{n-1}) / 2dt solved DOF by DOF); returns the energy they absorbed over
-    /// the step.
+    /// C (u_{n+1} - u_{n-1}) / 2dt solved DOF by DOF, and node by node for the coupled
+    /// ones: (I + R) u_{n+1} = next + R u_{n-1}); returns the energy they absorbed over the
+    /// step, (u_{n+1} - u_{n-1})^T C (u_{n+1} - u_{n-1}) / 4dt.
     pub(super) fn damp(&self, u_prev: &[f64], u: &[f64], next: &mut [f64], dt: f64) -> f64 {
         let mut loss = 0.0;
         for &(d, c, r) in &self.dashpots {
@@ -78,6 +150,17 @@ impl Coefficients {
             next[d] = (q + 2.0 * u[d] - (1.0 - r) * u_prev[d]) / (1.0 + r);
             let du = next[d] - u_prev[d];
             loss += c * du * du / (4.0 * dt);
+        }
+        for k in &self.coupled {
+            let dofs = [2 * k.node, 2 * k.node + 1];
+            let old = dofs.map(|d| u_prev[d]);
+            let rhs = [0, 1].map(|i| next[dofs[i]] + k.r[i][0] * old[0] + k.r[i][1] * old[1]);
+            let new = [0, 1].map(|i| k.inverse[i][0] * rhs[0] + k.inverse[i][1] * rhs[1]);
+            let du = [new[0] - old[0], new[1] - old[1]];
+            for i in 0..2 {
+                next[dofs[i]] = new[i];
+                loss += du[i] * (k.c[i][0] * du[0] + k.c[i][1] * du[1]) / (4.0 * dt);
+            }
         }
         loss
     }

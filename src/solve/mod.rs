@@ -28,7 +28,7 @@ use crate::fem::Model;
 use crate::mesh::Crack;
 use crate::signal::Signal;
 pub use contact_law::{ContactLaw, NoContact};
-pub use discretisation::{Discretisation, Fem, FemWorkspace};
+pub use discretisation::{Discretisation, Fem, FemWorkspace, NodeBlock};
 pub use explicit::{CentralDifference, Coefficients};
 pub use ledger::{EnergyLedger, Flows};
 pub use newmark::{Newmark, NewmarkBody};
@@ -732,7 +732,7 @@ fn fourth_order<D: Discretisation>(
              is second order; run losses with the explicit or the newmark integrator",
         );
     }
-    if !disc.dashpots().is_empty() {
+    if !disc.dashpots().is_empty() || !disc.coupled_dashpots().is_empty() {
         return refuse(
             "absorbing and viscous-spring edges (dashpots) are not implemented for it: its \
              correction K M^-1 K u, left without the dashpots' term, changes their boundary \

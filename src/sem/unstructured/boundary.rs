@@ -1,13 +1,16 @@
 //! Where unstructured spectral elements meet the outside: their sides on the straight edges
-//! of the body's bounding box (loads, dashpots and springs there, with the GLL edge
-//! quadrature), and the interpolation of a point inside any element.
+//! of the body's bounding box (loads there), dashpots and springs on those and on any line
+//! of boundary sides (straight, inclined or curved; in each point's own normal frame, with
+//! the GLL edge quadrature), and the interpolation of a point inside any element.
 
 use super::{side_point, UnstructuredSem};
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::fem::{VISCOUS_SPRING_ALPHA_N, VISCOUS_SPRING_ALPHA_T};
 use crate::mesh::Side;
-use crate::sem::boundary::{side_dashpots, side_springs, SidePoint};
+use crate::sem::boundary::impedance;
 use crate::sem::gll::Gll;
-use std::collections::BTreeMap;
+use crate::solve::NodeBlock;
+use std::collections::{BTreeMap, HashMap};
 
 /// One element side on an edge of the bounding box.
 #[derive(Clone, Copy, Debug)]
@@ -85,20 +88,6 @@ impl UnstructuredSem {
         let j = self.mesh.map(edge.element, xi, eta).jacobian;
         let column = edge.side % 2;
         j[0][column].hypot(j[1][column])
-    }
-
-    /// The GLL quadrature along `side`: (node, weight w_t |dx/ds|, element) of every point
-    /// of every element side on it.
-    fn side_quadrature(&self, side: Side) -> Vec<(usize, f64, usize)> {
-        let mut out = Vec::new();
-        for edge in self.edge_sides(side) {
-            for t in 0..=self.order {
-                let (i, j) = self.side_point(edge.side, t);
-                let w = self.gll.weights[t] * self.side_stretch(edge, self.gll.points[t]);
-                out.push((self.node(edge.element, i, j), w, edge.element));
-            }
-        }
-        out
     }
 
     /// The consistent load of a unit traction on the part `from..to` of `side` (along x on
@@ -196,42 +185,155 @@ impl UnstructuredSem {
         (inside(xi) && inside(eta)).then(|| (xi.clamp(-1.0, 1.0), eta.clamp(-1.0, 1.0)))
     }
 
-    /// Lysmer-Kuhlemeyer dashpots of the `sides` with GLL edge weights, as the layered
-    /// model's ([`crate::sem::SemModel::lysmer_dashpots`]), from the element's stiffness in
-    /// x-y axes. Sorted by DOF.
-    pub fn lysmer_dashpots(&self, sides: &[Side]) -> Vec<(usize, f64)> {
-        let mut c = BTreeMap::new();
-        for &side in sides {
-            side_dashpots(&mut c, &self.side_points(side));
-        }
-        c.into_iter().collect()
-    }
-
-    /// The springs of a viscous-spring edge on `side` (Liu et al. 2006), as the layered
-    /// model's ([`crate::sem::SemModel::viscous_springs`]), G = C_33 of the element,
-    /// R = `distance_m`. Sorted by DOF.
-    pub fn viscous_springs(&self, side: Side, distance_m: f64) -> Result<Vec<(usize, f64)>> {
-        side_springs(&self.side_points(side), distance_m)
-    }
-
-    /// The GLL points of `side` with their element's density and moduli in x-y axes.
-    fn side_points(&self, side: Side) -> Vec<SidePoint> {
-        let normal = self.edge_line(side).0;
-        self.side_quadrature(side)
+    /// The GLL points of the bounding box's `side`, with its outward normal.
+    pub fn side_points(&self, side: Side) -> Vec<BoundaryPoint> {
+        let normal = match side {
+            Side::Bottom => [0.0, -1.0],
+            Side::Top => [0.0, 1.0],
+            Side::Left => [-1.0, 0.0],
+            Side::Right => [1.0, 0.0],
+        };
+        let sides = self.edge_sides(side);
+        sides
             .into_iter()
-            .map(|(node, weight, e)| {
-                let k = self.element_stiffness(e);
-                SidePoint {
-                    node,
-                    normal,
-                    weight,
-                    density_kg_m3: self.materials[self.mesh.elements[e].material].density_kg_m3,
-                    c_normal_pa: if normal == 0 { k[0] } else { k[3] },
-                    c_shear_pa: k[5],
+            .flat_map(|edge| self.edge_points(edge, |_| normal))
+            .collect()
+    }
+
+    /// The GLL points of element side `edge`, with the outward normal `normal(s)` at side
+    /// coordinate s and the weight w_t |dx/ds|.
+    fn edge_points(&self, edge: EdgeSide, normal: impl Fn(f64) -> [f64; 2]) -> Vec<BoundaryPoint> {
+        (0..=self.order)
+            .map(|t| {
+                let (i, j) = self.side_point(edge.side, t);
+                let s = self.gll.points[t];
+                BoundaryPoint {
+                    node: self.node(edge.element, i, j),
+                    weight: self.gll.weights[t] * self.side_stretch(edge, s),
+                    element: edge.element,
+                    side: edge.side,
+                    normal: normal(s),
                 }
             })
             .collect()
     }
+
+    /// The GLL points of the element sides along `segments` (pairs of the mesh's nodes, as
+    /// [`crate::mesh::gmsh::read_line_sides`] gives a physical line), each with the outward
+    /// normal of its side there. A segment must be the side of exactly one element (on the
+    /// boundary; a crack's faces count as two); an error names its nodes otherwise.
+    pub fn line_points(&self, segments: &[[usize; 2]]) -> Result<Vec<BoundaryPoint>> {
+        let key = |a: usize, b: usize| {
+            let [p, q] = [a, b].map(|n| self.mesh.nodes[n].map(f64::to_bits));
+            (p.min(q), p.max(q))
+        };
+        let mut sides: HashMap<_, Vec<EdgeSide>> = HashMap::new();
+        for element in 0..self.elements() {
+            let c = self.mesh.corners(element);
+            let ends = [(c[0], c[1]), (c[1], c[2]), (c[3], c[2]), (c[0], c[3])];
+            for (side, (a, b)) in ends.into_iter().enumerate() {
+                sides
+                    .entry(key(a, b))
+                    .or_default()
+                    .push(EdgeSide { element, side });
+            }
+        }
+        let mut points = Vec::new();
+        for &[a, b] in segments {
+            let on = |n: usize| n < self.mesh.nodes.len();
+            let held = if on(a) && on(b) {
+                sides.get(&key(a, b)).map_or(&[][..], Vec::as_slice)
+            } else {
+                &[]
+            };
+            let &[edge] = held else {
+                return Err(Error::Mesh(format!(
+                    "the line segment between nodes {a} and {b} is {}",
+                    match held.len() {
+                        0 => "not an element side".to_string(),
+                        n => format!("the side of {n} elements, not on the boundary"),
+                    }
+                )));
+            };
+            let outward = |s| {
+                self.mesh
+                    .inward_normal(edge.element, edge.side, s)
+                    .map(|c| -c)
+            };
+            points.extend(self.edge_points(edge, outward));
+        }
+        Ok(points)
+    }
+
+    /// Lysmer-Kuhlemeyer dashpots at `points` (report Sec. 4.6, with GLL edge weights): per
+    /// point Z w, Z = sqrt(rho Gamma(n)) the impedance of waves crossing the boundary at
+    /// normal incidence in its element's material in x-y axes
+    /// ([`crate::sem::boundary::impedance`]); summed per node, sorted by node.
+    pub fn lysmer_dashpots(&self, points: &[BoundaryPoint]) -> Vec<(usize, NodeBlock)> {
+        sum_per_node(points.iter().map(|p| {
+            let rho = self.materials[self.mesh.elements[p.element].material].density_kg_m3;
+            let z = impedance(self.element_stiffness(p.element), rho, p.normal);
+            (p.node, z.map(|row| row.map(|v| v * p.weight)))
+        }))
+    }
+
+    /// The springs of a viscous-spring boundary at `points`, each with its R (Liu et al.
+    /// 2006, as the layered model's [`crate::sem::SemModel::viscous_springs`]): per point
+    /// (G w / R) (ALPHA_N n n^T + ALPHA_T t t^T), G = C33 of the element in x-y axes and R
+    /// the distance from the wave source; summed per node, sorted by node. An error names
+    /// `absorber.source_distance_m` where R is not positive.
+    pub fn viscous_springs(
+        &self,
+        points: &[(BoundaryPoint, f64)],
+    ) -> Result<Vec<(usize, NodeBlock)>> {
+        let mut blocks = Vec::with_capacity(points.len());
+        for &(p, r) in points {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(Error::invalid(
+                    "absorber.source_distance_m",
+                    r,
+                    "must be a positive distance from the wave source to the absorbing \
+                     boundary (m)",
+                ));
+            }
+            let g = self.element_stiffness(p.element)[5] * p.weight / r;
+            let (n, t) = (p.normal, [-p.normal[1], p.normal[0]]);
+            let k = |i: usize, j: usize| {
+                g * (VISCOUS_SPRING_ALPHA_N * n[i] * n[j] + VISCOUS_SPRING_ALPHA_T * t[i] * t[j])
+            };
+            blocks.push((p.node, [[k(0, 0), k(0, 1)], [k(1, 0), k(1, 1)]]));
+        }
+        Ok(sum_per_node(blocks))
+    }
+}
+
+/// A GLL point on the boundary.
+#[derive(Clone, Copy, Debug)]
+pub struct BoundaryPoint {
+    /// Its global node.
+    pub node: usize,
+    /// Its edge weight w_t |dx/ds| (m).
+    pub weight: f64,
+    /// The element whose side it is on.
+    pub element: usize,
+    /// Which side: 0: eta = -1, 1: xi = 1, 2: eta = 1, 3: xi = -1.
+    pub side: usize,
+    /// The boundary's outward unit normal there.
+    pub normal: [f64; 2],
+}
+
+/// The blocks summed per node (a node shared by two sides gets both), sorted by node.
+fn sum_per_node(blocks: impl IntoIterator<Item = (usize, NodeBlock)>) -> Vec<(usize, NodeBlock)> {
+    let mut sum = BTreeMap::<usize, NodeBlock>::new();
+    for (node, b) in blocks {
+        let s = sum.entry(node).or_insert([[0.0; 2]; 2]);
+        for i in 0..2 {
+            for j in 0..2 {
+                s[i][j] += b[i][j];
+            }
+        }
+    }
+    sum.into_iter().collect()
 }
 
 /// The side coordinate s in [-1, 1] where the monotone `coordinate(s)` equals `value`

@@ -8,7 +8,7 @@
 //!   F_xi = w det J sigma . grad xi,  F_eta = w det J sigma . grad eta.
 
 use super::{Lanes, UnstructuredSem, LANES};
-use crate::solve::Discretisation;
+use crate::solve::{Discretisation, NodeBlock};
 use rayon::prelude::*;
 
 /// Elements per parallel task of the element pass, nodes per task of the gather.
@@ -127,7 +127,7 @@ impl UnstructuredSem {
 
     /// Sums each node's element forces (in the fixed order of its incidence list) and its
     /// springs into (K u)_d and writes `finish(d, (K u)_d)` to `out[d]`, in parallel over
-    /// chunks of nodes. The springs are sorted by DOF, each DOF once ([`Self::check`]).
+    /// chunks of nodes. The springs are sorted by node, each node once ([`Self::check`]).
     fn gather(
         &self,
         u: &[f64],
@@ -140,7 +140,7 @@ impl UnstructuredSem {
             .enumerate()
             .for_each(|(chunk, out)| {
                 let first = chunk * NODE_CHUNK;
-                let mut spring = self.springs.partition_point(|&(d, _)| d < 2 * first);
+                let mut spring = self.springs.partition_point(|&(node, _)| node < first);
                 for (k, f) in out.chunks_mut(2).enumerate() {
                     let g = first + k;
                     let held =
@@ -150,8 +150,10 @@ impl UnstructuredSem {
                         ku[0] += forces[p][0];
                         ku[1] += forces[p][1];
                     }
-                    while let Some(&(d, k)) = self.springs.get(spring).filter(|s| s.0 < 2 * g + 2) {
-                        ku[d - 2 * g] += k * u[d];
+                    if let Some(&(_, k)) = self.springs.get(spring).filter(|s| s.0 == g) {
+                        let (x, y) = (u[2 * g], u[2 * g + 1]);
+                        ku[0] += k[0][0] * x + k[0][1] * y;
+                        ku[1] += k[1][0] * x + k[1][1] * y;
                         spring += 1;
                     }
                     f[0] = finish(2 * g, ku[0]);
@@ -160,31 +162,63 @@ impl UnstructuredSem {
             });
     }
 
-    /// Checks the model's own data before a run: fixed DOFs, dashpots and springs name DOFs
-    /// of the model, and the springs are sorted by DOF with each DOF once (as the gather reads
-    /// them); an error names the field.
+    /// Checks the model's own data before a run, naming the field that is wrong: fixed DOFs,
+    /// dashpots, springs and ties name DOFs or nodes of the model; the dashpots and springs
+    /// are sorted by node, each node once (as the gather and the stepper read them); no
+    /// crack pair sits on a dashpot's node (its gap's compliance would couple x and y) and
+    /// no dashpot's node is on a tie but both of its DOFs' (as periodic edges tie them).
     pub fn check(&self) -> crate::error::Result<()> {
+        use crate::error::Error;
         let n = self.dofs();
         let outside = |field: &str, d: usize| {
-            crate::error::Error::invalid(field, d, format!("is not a DOF of this model ({n} DOFs)"))
+            Error::invalid(field, d, format!("is not a DOF of this model ({n} DOFs)"))
         };
         if let Some(&d) = self.fixed_dofs.iter().find(|&&d| d >= n) {
             return Err(outside("fixed_dofs", d));
         }
-        if let Some(&(d, _)) = self.dashpots.iter().find(|&&(d, _)| d >= n) {
-            return Err(outside("dashpots", d));
-        }
-        if let Some(&(d, _)) = self.springs.iter().find(|&&(d, _)| d >= n) {
-            return Err(outside("springs", d));
-        }
         if let Some(&(l, r)) = self.periodic.iter().find(|&&(l, r)| l.max(r) >= n) {
             return Err(outside("periodic", l.max(r)));
         }
-        if let Some(w) = self.springs.windows(2).find(|w| w[0].0 >= w[1].0) {
-            return Err(crate::error::Error::invalid(
-                "springs",
-                w[1].0,
-                "must be sorted by DOF, each DOF once",
+        for (field, blocks) in [("dashpots", &self.dashpots), ("springs", &self.springs)] {
+            if let Some(&(node, _)) = blocks.iter().find(|&&(node, _)| 2 * node >= n) {
+                return Err(Error::invalid(
+                    field,
+                    node,
+                    format!("is not a node of this model ({} nodes)", n / 2),
+                ));
+            }
+            if let Some(w) = blocks.windows(2).find(|w| w[0].0 >= w[1].0) {
+                return Err(Error::invalid(
+                    field,
+                    w[1].0,
+                    "must be sorted by node, each node once",
+                ));
+            }
+        }
+        let damped = |node: usize| self.dashpots.binary_search_by_key(&node, |b| b.0).is_ok();
+        if let Some(pair) = self
+            .crack
+            .iter()
+            .flat_map(|c| &c.pairs)
+            .find(|p| damped(p.master) || damped(p.slave))
+        {
+            return Err(Error::invalid(
+                "dashpots",
+                format!("nodes {} and {}", pair.master, pair.slave),
+                "a crack pair sits on an absorbing side or line: a crack may not reach one",
+            ));
+        }
+        let tied: std::collections::BTreeSet<usize> =
+            self.periodic.iter().flat_map(|&(l, r)| [l, r]).collect();
+        if let Some(&(node, _)) = self
+            .dashpots
+            .iter()
+            .find(|&&(node, _)| tied.contains(&(2 * node)) != tied.contains(&(2 * node + 1)))
+        {
+            return Err(Error::invalid(
+                "dashpots",
+                node,
+                "is on a node with one DOF tied: ties must hold both of a damped node's DOFs",
             ));
         }
         Ok(())
@@ -411,6 +445,9 @@ impl Discretisation for UnstructuredSem {
         &self.fixed_dofs
     }
     fn dashpots(&self) -> &[(usize, f64)] {
+        &[]
+    }
+    fn coupled_dashpots(&self) -> &[(usize, NodeBlock)] {
         &self.dashpots
     }
     fn periodic_ties(&self) -> &[(usize, usize)] {

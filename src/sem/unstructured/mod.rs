@@ -15,6 +15,8 @@
 
 mod boundary;
 mod kernel;
+
+pub use boundary::BoundaryPoint;
 #[cfg(test)]
 mod tests;
 
@@ -25,6 +27,7 @@ use crate::material::Material;
 use crate::mesh::cut::CutSide;
 use crate::mesh::quad::QuadMesh;
 use crate::mesh::{Crack, CrackPair};
+use crate::solve::NodeBlock;
 use std::collections::HashMap;
 
 /// Spectral elements of one order on a quadrilateral mesh: the GLL points, their metric,
@@ -42,14 +45,17 @@ pub struct UnstructuredSem {
     pub lumped_mass: Vec<f64>,
     /// DOFs held at zero (none unless set).
     pub fixed_dofs: Vec<usize>,
-    /// (DOF, c) of dashpots (none unless set, see [`UnstructuredSem::lysmer_dashpots`]).
-    pub dashpots: Vec<(usize, f64)>,
+    /// (node, C) of the dashpots of absorbing sides and lines, 2x2 blocks on the node's
+    /// velocity (none unless set, see [`UnstructuredSem::lysmer_dashpots`]); sorted by node,
+    /// each node once.
+    pub dashpots: Vec<(usize, NodeBlock)>,
     /// (left DOF, right DOF) of periodic left and right edges, which move as one (none
     /// unless set, see [`crate::fem::periodic_ties`]).
     pub periodic: Vec<(usize, usize)>,
-    /// (DOF, k) of the diagonal springs of viscous-spring edges (none unless set, see
-    /// [`UnstructuredSem::viscous_springs`]), added to K u; sorted by DOF, each DOF once.
-    pub springs: Vec<(usize, f64)>,
+    /// (node, K) of the springs of viscous-spring sides and lines, 2x2 blocks on the node's
+    /// displacement added to K u (none unless set, see [`UnstructuredSem::viscous_springs`]);
+    /// sorted by node, each node once.
+    pub springs: Vec<(usize, NodeBlock)>,
     /// The mesh, its elements counter-clockwise (cut along the crack, if any).
     pub mesh: QuadMesh,
     /// The crack's GLL node pairs, each in its own frame (none unless built by
