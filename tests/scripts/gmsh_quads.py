@@ -8,8 +8,10 @@ package: python3 gmsh_quads.py):
 - gmsh_quad_plate.msh, gmsh_quad_plate_crack.msh and gmsh_quad_plate_unstructured.msh: a
   two-layer plate (below);
 - gmsh_hole.msh: a square with a circular hole;
-- gmsh_quad_crack.msh: a plate with an inclined crack."""
+- gmsh_quad_crack.msh: a plate with an inclined crack;
+- gmsh_annulus.msh: an annulus round a cavity, its two circles physical lines."""
 import gmsh
+import math
 
 
 def disk(name, second_order):
@@ -201,3 +203,41 @@ def cracked_plate():
 
 
 cracked_plate()
+
+
+def annulus():
+    """gmsh_annulus.msh: an annulus of one material (physical surface 1) round the origin,
+    from a cavity of radius 1 mm (physical line 2) to an outer circle of radius 10 mm
+    (physical line 3), as a structured grid of 9-node quadrilaterals (curved: 48 round,
+    18 across, 0.5 mm) in four quarter sectors (tests/unstructured_absorbing.rs radiates a
+    cylindrical wave from the pressurised cavity through the absorbing outer circle)."""
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.add("annulus")
+    geo = gmsh.model.geo
+    centre = geo.addPoint(0, 0, 0)
+    corners = [(math.cos(k * math.pi / 2), math.sin(k * math.pi / 2)) for k in range(4)]
+    inner = [geo.addPoint(1e-3 * c, 1e-3 * s, 0) for c, s in corners]
+    outer = [geo.addPoint(10e-3 * c, 10e-3 * s, 0) for c, s in corners]
+    radial = [geo.addLine(inner[k], outer[k]) for k in range(4)]
+    inner_arcs = [geo.addCircleArc(inner[k], centre, inner[(k + 1) % 4]) for k in range(4)]
+    outer_arcs = [geo.addCircleArc(outer[k], centre, outer[(k + 1) % 4]) for k in range(4)]
+    surfaces = []
+    for k in range(4):
+        loop = geo.addCurveLoop([radial[k], outer_arcs[k], -radial[(k + 1) % 4], -inner_arcs[k]])
+        surfaces.append(geo.addPlaneSurface([loop]))
+    geo.synchronize()
+    for curve in radial:
+        gmsh.model.mesh.setTransfiniteCurve(curve, 19)
+    for curve in inner_arcs + outer_arcs:
+        gmsh.model.mesh.setTransfiniteCurve(curve, 13)
+    for surface in surfaces:
+        gmsh.model.mesh.setTransfiniteSurface(surface)
+        gmsh.model.mesh.setRecombine(2, surface)
+    gmsh.model.addPhysicalGroup(2, surfaces, 1)
+    gmsh.model.addPhysicalGroup(1, inner_arcs, 2)
+    gmsh.model.addPhysicalGroup(1, outer_arcs, 3)
+    write_curved_quads("gmsh_annulus.msh")
+
+
+annulus()

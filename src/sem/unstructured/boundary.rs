@@ -279,8 +279,8 @@ impl UnstructuredSem {
 
     /// The springs of a viscous-spring boundary at `points`, each with its R (Liu et al.
     /// 2006, as the layered model's [`crate::sem::SemModel::viscous_springs`]): per point
-    /// (G w / R) (ALPHA_N n n^T + ALPHA_T t t^T), G = C33 of the element in x-y axes and R
-    /// the distance from the wave source; summed per node, sorted by node. An error names
+    /// (G w / R) (ALPHA_N n n^T + ALPHA_T t t^T), G the element's shear modulus in the
+    /// boundary's frame ([`shear_modulus_across`]) and R the distance from the wave source; summed per node, sorted by node. An error names
     /// `absorber.source_distance_m` where R is not positive.
     pub fn viscous_springs(
         &self,
@@ -296,8 +296,8 @@ impl UnstructuredSem {
                      boundary (m)",
                 ));
             }
-            let g = self.element_stiffness(p.element)[5] * p.weight / r;
             let (n, t) = (p.normal, [-p.normal[1], p.normal[0]]);
+            let g = shear_modulus_across(self.element_stiffness(p.element), n) * p.weight / r;
             let k = |i: usize, j: usize| {
                 g * (VISCOUS_SPRING_ALPHA_N * n[i] * n[j] + VISCOUS_SPRING_ALPHA_T * t[i] * t[j])
             };
@@ -305,6 +305,21 @@ impl UnstructuredSem {
         }
         Ok(sum_per_node(blocks))
     }
+}
+
+/// The shear modulus G = C'33 of the plane stiffness `c` = (C11, C12, C13, C22, C23, C33)
+/// in the frame (t, n) of a boundary of unit normal n, t = (-n_y, n_x): the stress t.sigma.n
+/// of the unit shear strain gamma_tn = 1, eps^T C eps with eps = (t_x n_x, t_y n_y,
+/// t_x n_y + t_y n_x) in Voigt form. C33 itself on a side along x or y; the same for the
+/// body turned with its boundary.
+fn shear_modulus_across(c: [f64; 6], n: [f64; 2]) -> f64 {
+    let [c11, c12, c13, c22, c23, c33] = c;
+    let t = [-n[1], n[0]];
+    let e = [t[0] * n[0], t[1] * n[1], t[0] * n[1] + t[1] * n[0]];
+    c11 * e[0] * e[0]
+        + c22 * e[1] * e[1]
+        + c33 * e[2] * e[2]
+        + 2.0 * (c12 * e[0] * e[1] + c13 * e[0] * e[2] + c23 * e[1] * e[2])
 }
 
 /// A GLL point on the boundary.
