@@ -75,6 +75,9 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         "woven.csv",
         "woven_traces.png",
         "woven_snapshot.png",
+        "bracket.csv",
+        "bracket_traces.png",
+        "bracket_scattered.png",
     ] {
         let path = out.join("plots").join(file);
         let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));

@@ -253,6 +253,7 @@ fn bad_sem_scenes_are_errors_naming_the_field() {
             tied: false,
             order: None,
             angles_deg: Default::default(),
+            axes_round: Default::default(),
             absorbing_lines: vec![],
             bytes: None,
         }),

@@ -56,8 +56,25 @@ fn turned_block(angle: f64) -> (QuadMesh, Vec<[usize; 2]>) {
 /// The block pushed by (p_t, -p_n) in its own frame at `angle`: the run, the block's mass
 /// and the model.
 fn push(angle: f64, p_n: f64, p_t: f64, friction: f64) -> (RunOutput, f64, UnstructuredSem) {
+    push_run(angle, p_n, p_t, friction, false).unwrap()
+}
+
+/// [`push`], with dashpots on the left side (base and block) when `absorbing_left`; the
+/// run's error where there is one.
+fn push_run(
+    angle: f64,
+    p_n: f64,
+    p_t: f64,
+    friction: f64,
+    absorbing_left: bool,
+) -> trnews::error::Result<(RunOutput, f64, UnstructuredSem)> {
     let (mesh, crack) = turned_block(angle);
     let mut m = UnstructuredSem::cracked(&mesh, vec![epoxy()], ORDER, &crack).unwrap();
+    if absorbing_left {
+        let at = |j: usize| j * (COLUMNS + 1);
+        let left: Vec<[usize; 2]> = (0..3).map(|j| [at(j), at(j + 1)]).collect();
+        m.dashpots = m.lysmer_dashpots(&m.line_points(&left).unwrap());
+    }
     let n = ORDER + 1;
     let points = |rows: std::ops::Range<usize>| {
         let mut nodes: Vec<usize> = rows
@@ -124,8 +141,8 @@ fn push(angle: f64, p_n: f64, p_t: f64, friction: f64) -> (RunOutput, f64, Unstr
         progress: false,
         ..Default::default()
     };
-    let out = run_on(&m, dt_crit, &[source], &[receiver], &config).unwrap();
-    (out, mass, m)
+    let out = run_on(&m, dt_crit, &[source], &[receiver], &config)?;
+    Ok((out, mass, m))
 }
 
 /// The crack's pairs carry the face's normal, turned with the mesh, and every pair is a
@@ -193,6 +210,40 @@ fn a_turned_pushed_block_slides_at_coulomb_deceleration_or_sticks() {
     assert!(
         mean.abs() < 0.02 * free,
         "{mean} m/s (free sliding: {free} m/s)"
+    );
+}
+
+/// The through-crack reaching an absorbing line on the left: level, the line's dashpots act
+/// along x and y apart, the crack's end pair sits on them, and the contact solver takes
+/// their damping into each DOF's compliance: the block slides (slower than free of the
+/// dashpots' drag), its faces do not interpenetrate (measured 2e-25 m; asserted 1e-20 m)
+/// and the ledger closes (1e-9). Turned by 30 degrees, the line's dashpots couple x and y at
+/// the crack's end, and the run is refused naming the dashpots and the pair's nodes.
+#[test]
+fn a_crack_reaches_an_absorbing_line_only_where_its_dashpots_act_along_the_axes() {
+    let (mu, p_n, p_t) = (0.3, 1e6, 0.6e6);
+    let (out, mass, _) = push_run(0.0, p_n, p_t, mu, true).unwrap();
+    let contact = out.report.contact.as_ref().unwrap();
+    let measured = acceleration_after_ramp(&out.traces[0]);
+    let free = (p_t - mu * p_n) * BLOCK_WIDTH / mass;
+    eprintln!(
+        "absorbing left: acceleration {:.3} of (T - mu N)/m, penetration {:.1e} m, residual {:.1e}",
+        measured / free,
+        contact.max_penetration_m,
+        out.report.energy_residual_peak
+    );
+    assert!(contact.max_pairs_slipping > 0);
+    assert!(measured > 0.0 && measured < free);
+    assert!(contact.max_penetration_m < 1e-20);
+    assert!(out.report.energy_residual_peak < 1e-9, "{:?}", out.report);
+    assert!(out.ledger.dashpot_loss_j.last().copied().unwrap() > 0.0);
+    let e = push_run(30f64.to_radians(), p_n, p_t, mu, true)
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("dashpots") && e.contains("couple x and y"),
+        "{e}"
     );
 }
 

@@ -69,6 +69,12 @@ pub struct GmshSpec {
     /// (degrees), keyed as `materials`; 0 where not given. Spectral elements only.
     #[serde(default)]
     pub angles_deg: std::collections::BTreeMap<String, f64>,
+    /// Groups whose material axes go round a point (x, y) (m), keyed as `materials`: each
+    /// element's axes turned to the hoop direction at its centre, plus the group's
+    /// `angles_deg` (plies that follow a circular arc, as round a bracket's corner).
+    /// Spectral elements only.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub axes_round: std::collections::BTreeMap<String, [f64; 2]>,
     /// Tags of physical lines that absorb as `absorber` says, on spectral elements (`order`):
     /// any chain of boundary element sides, straight, inclined or curved, with dashpots and
     /// springs in each point's own normal frame. The viscous-spring boundary's R, where

@@ -62,6 +62,13 @@ fn gmsh_mesh(spec: &SceneSpec, g: &GmshSpec) -> Result<Built> {
             on_quads,
         ));
     }
+    if let Some(key) = g.axes_round.keys().next() {
+        return Err(Error::invalid(
+            format!("gmsh.axes_round.{key}"),
+            "given",
+            on_quads,
+        ));
+    }
     if let Some(line) = g.absorbing_lines.first() {
         return Err(Error::invalid("gmsh.absorbing_lines", line, on_quads));
     }

@@ -43,8 +43,9 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
         }
         entry.1 = degrees.to_radians();
     }
-    let mesh = crate::mesh::gmsh::read_quads(&bytes, &physical)
+    let mut mesh = crate::mesh::gmsh::read_quads(&bytes, &physical)
         .map_err(|e| Error::invalid("gmsh.path", &g.path, e.to_string()))?;
+    turn_axes_round(&mut mesh, g, &physical)?;
     let points = mesh.elements.len() as f64 * ((order + 1) as f64).powi(2);
     crate::budget::check_memory(
         "gmsh.order",
@@ -117,6 +118,43 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
         crack_placement: None,
         stability,
     })
+}
+
+/// Turns the material axes of `g.axes_round`'s groups element by element: to the hoop
+/// direction round the group's point at the element's centre (the map of (0, 0)), plus the
+/// group's angle in `physical` (from `angles_deg`). A key naming no group of
+/// `gmsh.materials`, or a point not finite, is an error naming it.
+fn turn_axes_round(
+    mesh: &mut crate::mesh::quad::QuadMesh,
+    g: &GmshSpec,
+    physical: &HashMap<i32, (usize, f64)>,
+) -> Result<()> {
+    for (key, &centre) in &g.axes_round {
+        let field = format!("gmsh.axes_round.{key}");
+        let tag = group_tag("gmsh.axes_round", key)?;
+        let &(material, offset) = physical.get(&tag).ok_or_else(|| {
+            Error::invalid(
+                &field,
+                format!("{centre:?}"),
+                "names no group of gmsh.materials",
+            )
+        })?;
+        if !centre.iter().all(|c| c.is_finite()) {
+            return Err(Error::invalid(
+                &field,
+                format!("{centre:?}"),
+                "must be a finite point (m)",
+            ));
+        }
+        for e in 0..mesh.elements.len() {
+            if mesh.elements[e].material == material {
+                let x = mesh.map(e, 0.0, 0.0).x;
+                let hoop = (x[1] - centre[1]).atan2(x[0] - centre[0]) + std::f64::consts::FRAC_PI_2;
+                mesh.elements[e].angle_rad = hoop + offset;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// A model with its edges' conditions, its GLL nodes as triangles and its bounding box.

@@ -30,7 +30,9 @@ pub struct Coefficients {
     /// Every coupled dashpot's node and constants.
     coupled: Vec<CoupledDashpot>,
     /// Compliance of the corrected update, dt^2 / (m (1 + r)): how far a unit force moves a
-    /// DOF in one step (the contact solvers' D).
+    /// DOF in one step (the contact solvers' D; where a coupled dashpot's R is diagonal,
+    /// r = R_ii; a crack pair may not sit where R couples x and y, see
+    /// [`crate::sem::unstructured::UnstructuredSem::check`]).
     pub compliance: Vec<f64>,
     /// (left DOF, right DOF, m_l / (m_l + m_r)) for every periodic tie.
     ties: Vec<(usize, usize, f64)>,
@@ -62,6 +64,14 @@ impl Coefficients {
             compliance[d] /= 1.0 + r;
         }
         let coupled = coupled_dashpots(body, &a, &ties, dt);
+        for k in coupled
+            .iter()
+            .filter(|k| k.r[0][1] == 0.0 && k.r[1][0] == 0.0)
+        {
+            for i in 0..2 {
+                compliance[2 * k.node + i] /= 1.0 + k.r[i][i];
+            }
+        }
         Coefficients {
             a,
             dashpots,

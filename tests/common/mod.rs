@@ -514,6 +514,7 @@ pub fn gmsh_mesh(
         tied: false,
         order,
         angles_deg: Default::default(),
+        axes_round: Default::default(),
         absorbing_lines: vec![],
         bytes: None,
     }

@@ -165,8 +165,8 @@ impl UnstructuredSem {
     /// Checks the model's own data before a run, naming the field that is wrong: fixed DOFs,
     /// dashpots, springs and ties name DOFs or nodes of the model; the dashpots and springs
     /// are sorted by node, each node once (as the gather and the stepper read them); no
-    /// crack pair sits on a dashpot's node (its gap's compliance would couple x and y) and
-    /// no dashpot's node is on a tie but both of its DOFs' (as periodic edges tie them).
+    /// crack pair sits on a dashpot coupling x and y (its gap's compliance would couple them)
+    /// and no dashpot's node is on a tie but both of its DOFs' (as periodic edges tie them).
     pub fn check(&self) -> crate::error::Result<()> {
         use crate::error::Error;
         let n = self.dofs();
@@ -195,17 +195,22 @@ impl UnstructuredSem {
                 ));
             }
         }
-        let damped = |node: usize| self.dashpots.binary_search_by_key(&node, |b| b.0).is_ok();
+        let coupled = |node: usize| {
+            let at = self.dashpots.binary_search_by_key(&node, |b| b.0);
+            at.is_ok_and(|k| self.dashpots[k].1[0][1] != 0.0)
+        };
         if let Some(pair) = self
             .crack
             .iter()
             .flat_map(|c| &c.pairs)
-            .find(|p| damped(p.master) || damped(p.slave))
+            .find(|p| coupled(p.master) || coupled(p.slave))
         {
             return Err(Error::invalid(
                 "dashpots",
                 format!("nodes {} and {}", pair.master, pair.slave),
-                "a crack pair sits on an absorbing side or line: a crack may not reach one",
+                "a crack pair sits where the absorbing boundary's dashpots couple x and y (an \
+                 inclined or curved absorbing line, or a turned material): a crack may reach \
+                 an absorbing side only where the dashpots act along x and y apart",
             ));
         }
         let tied: std::collections::BTreeSet<usize> =
