@@ -20,6 +20,8 @@ pub(super) fn source_centre(spec: &SceneSpec, mesh: &Mesh, region: Region) -> [f
     let (x0, y0) = (region.x0, region.y0);
     let p = match first {
         SourceSpec::Point { x_m, y_m, .. } => [*x_m, *y_m],
+        // no single point: a distance from it is refused where it is needed
+        SourceSpec::Line { .. } => [f64::NAN; 2],
         SourceSpec::Traction {
             edge, x_m, depth_m, ..
         }
@@ -190,6 +192,14 @@ pub(super) fn source_weights(on: &dyn Attach, sources: &[SourceSpec]) -> Result<
                 weights.extend([(2 * node, scale * c), (2 * node + 1, scale * s)]);
                 continue;
             }
+            SourceSpec::Line { line, .. } => {
+                return Err(Error::invalid(
+                    format!("{field}.line"),
+                    line,
+                    "a line source needs a Gmsh mesh of quadrilaterals on spectral elements \
+                     (gmsh.order)",
+                ))
+            }
             SourceSpec::Traction {
                 edge,
                 x_m,
@@ -224,7 +234,7 @@ pub(super) fn source_weights(on: &dyn Attach, sources: &[SourceSpec]) -> Result<
     Ok(weights)
 }
 
-fn check_scale(field: &str, scale: f64) -> Result<()> {
+pub(super) fn check_scale(field: &str, scale: f64) -> Result<()> {
     if !scale.is_finite() || scale == 0.0 {
         return Err(Error::invalid(
             format!("{field}.scale"),

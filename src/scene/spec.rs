@@ -253,6 +253,18 @@ pub enum SourceSpec {
         #[serde(default = "unit_scale")]
         scale: f64,
     },
+    /// A uniform normal traction t = scale drive(t) n on a physical line of a Gmsh mesh on
+    /// spectral elements (`gmsh.order`), n the boundary's outward normal at each point
+    /// (positive pulls the surface outward): a transducer on a curved or inclined face, a
+    /// pressure in a cavity. With viscous-spring edges the springs' R must then be given
+    /// (`absorber.source_distance_m`).
+    Line {
+        /// The physical line's tag.
+        line: i32,
+        /// Factor on the drive signal.
+        #[serde(default = "unit_scale")]
+        scale: f64,
+    },
 }
 
 fn unit_scale() -> f64 {

@@ -9,7 +9,7 @@ use super::edges::{absorbing_edges, edge_conditions, held_and_pinned_dofs, is_pe
 use super::sem::{stability, OnSem};
 use super::sources::{source_weights, transmitter_weights};
 use super::spec::{Absorber, EdgeCondition};
-use super::spec::{GmshSpec, SceneSpec};
+use super::spec::{GmshSpec, SceneSpec, SourceSpec};
 use super::{Body, Scene};
 use crate::error::{Error, Result};
 use crate::laminate::Laminate;
@@ -98,7 +98,14 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
     let transmitter = if spec.sources.is_empty() {
         transmitter_weights(&on, &spec.transmitter, region)?
     } else {
-        source_weights(&on, &spec.sources)?
+        let (lines, others): (Vec<_>, Vec<_>) = (spec.sources.iter().cloned().enumerate())
+            .partition(|(_, s)| matches!(s, SourceSpec::Line { .. }));
+        let others: Vec<SourceSpec> = others.into_iter().map(|(_, s)| s).collect();
+        let mut weights = source_weights(&on, &others)?;
+        for (i, source) in lines {
+            weights.extend(line_source(&model, &bytes, i, &source)?);
+        }
+        weights
     };
     let receivers = super::build_receivers(&on, &spec.receivers, region.height)?;
     let stability = match cracked {
@@ -118,6 +125,28 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
         crack_placement: None,
         stability,
     })
+}
+
+/// The nodal weights of line source `sources[i]` ([`SourceSpec::Line`]) per unit drive: the
+/// consistent load scale w n of a unit normal traction at each GLL point of the line.
+fn line_source(
+    model: &UnstructuredSem,
+    bytes: &[u8],
+    i: usize,
+    source: &SourceSpec,
+) -> Result<Vec<(usize, f64)>> {
+    let &SourceSpec::Line { line, scale } = source else {
+        return Ok(vec![]);
+    };
+    let field = format!("sources[{i}].line");
+    super::sources::check_scale(&format!("sources[{i}]"), scale)?;
+    let points = crate::mesh::gmsh::read_line_sides(bytes, line)
+        .and_then(|segments| model.line_points(&segments))
+        .map_err(|e| Error::invalid(&field, line, e.to_string()))?;
+    Ok(points
+        .iter()
+        .flat_map(|p| [0, 1].map(|c| (2 * p.node + c, scale * p.weight * p.normal[c])))
+        .collect())
 }
 
 /// Turns the material axes of `g.axes_round`'s groups element by element: to the hoop
@@ -205,6 +234,21 @@ fn constrain(spec: &SceneSpec, edges: &Edges, mut model: UnstructuredSem) -> Res
     }
     let centre = super::sources::source_centre(spec, &nodes, region);
     let source = [x0 + centre[0], y0 + centre[1]];
+    let no_point = matches!(
+        spec.absorber,
+        Absorber::ViscousSpring {
+            source_distance_m: None
+        }
+    ) && !edges.lines.is_empty()
+        && source[0].is_nan();
+    if no_point {
+        return Err(Error::invalid(
+            "absorber.source_distance_m",
+            "none",
+            "the first source is a line, which has no single point to measure R from: give \
+             the distance R from the wave source to the absorbing lines",
+        ));
+    }
     let mut absorbs: HashSet<_> = points.iter().map(|p| (p.element, p.side)).collect();
     for (group, segments) in edges.lines {
         let line = model
