@@ -98,13 +98,17 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
     let transmitter = if spec.sources.is_empty() {
         transmitter_weights(&on, &spec.transmitter, region)?
     } else {
-        let (lines, others): (Vec<_>, Vec<_>) = (spec.sources.iter().cloned().enumerate())
-            .partition(|(_, s)| matches!(s, SourceSpec::Line { .. }));
-        let others: Vec<SourceSpec> = others.into_iter().map(|(_, s)| s).collect();
-        let mut weights = source_weights(&on, &others)?;
-        for (i, source) in lines {
-            weights.extend(line_source(&model, &bytes, i, &source)?);
+        let mut weights = Vec::new();
+        let mut others = Vec::new();
+        for (i, source) in spec.sources.iter().enumerate() {
+            match *source {
+                SourceSpec::Line { line, scale } => {
+                    weights.extend(line_source(&model, &bytes, i, (line, scale))?);
+                }
+                _ => others.push(source.clone()),
+            }
         }
+        weights.extend(source_weights(&on, &others)?);
         weights
     };
     let receivers = super::build_receivers(&on, &spec.receivers, region.height)?;
@@ -127,17 +131,15 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
     })
 }
 
-/// The nodal weights of line source `sources[i]` ([`SourceSpec::Line`]) per unit drive: the
-/// consistent load scale w n of a unit normal traction at each GLL point of the line.
+/// The nodal weights of line source `sources[i]` ([`SourceSpec::Line`] on physical line
+/// `line`, factor `scale`) per unit drive: the consistent load scale w n of a unit normal
+/// traction at each GLL point of the line.
 fn line_source(
     model: &UnstructuredSem,
     bytes: &[u8],
     i: usize,
-    source: &SourceSpec,
+    (line, scale): (i32, f64),
 ) -> Result<Vec<(usize, f64)>> {
-    let &SourceSpec::Line { line, scale } = source else {
-        return Ok(vec![]);
-    };
     let field = format!("sources[{i}].line");
     super::sources::check_scale(&format!("sources[{i}]"), scale)?;
     let points = crate::mesh::gmsh::read_line_sides(bytes, line)
@@ -287,21 +289,14 @@ fn constrain(spec: &SceneSpec, edges: &Edges, mut model: UnstructuredSem) -> Res
 }
 
 /// Refuses what spectral elements on a Gmsh mesh do not take yet, naming the field: a
-/// rectangular crack (the crack is `gmsh.crack_line`), periodic edges with a crack, losses.
+/// rectangular crack (the crack is `gmsh.crack_line`), losses. (A crack reaching a periodic
+/// edge is refused by [`UnstructuredSem::check`].)
 fn refuse_unbuilt(spec: &SceneSpec, g: &GmshSpec) -> Result<()> {
     if spec.crack.is_some() {
         return Err(Error::invalid(
             "crack",
             "a rectangular crack",
             "a Gmsh scene takes its crack from gmsh.crack_line: set crack: ()",
-        ));
-    }
-    if is_periodic(&edge_conditions(spec)?) && g.crack_line.is_some() {
-        return Err(Error::invalid(
-            "edges",
-            "periodic",
-            "periodic edges with a crack are not built on spectral elements of a Gmsh mesh \
-             yet (a crack reaching an edge would give it two nodes at one height)",
         ));
     }
     if spec.attenuation.is_some() {

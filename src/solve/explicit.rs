@@ -7,8 +7,7 @@
 //! then sparse corrections touch only what the scene has: source DOFs, periodic ties (each
 //! tied pair takes the mass-weighted mean of its two updates, the update of one DOF of mass
 //! m_l + m_r under the force f_l + f_r), dashpot DOFs and coupled dashpots' nodes, crack
-//! pairs. Fixed DOFs have
-//! dt^2/m = 0 and so never move. Nothing is allocated per step.
+//! pairs. Fixed DOFs have dt^2/m = 0 and so never move. Nothing is allocated per step.
 //! The kernel is the discretisation's [`Discretisation::explicit_update`] (for T3: matrix-free
 //! stencils on structured meshes, the assembled K elsewhere; for spectral elements: sum
 //! factorisation); the contact law is a type parameter ([`ContactLaw`]).
@@ -149,26 +148,36 @@ fn add(x: NodeBlock, y: NodeBlock) -> NodeBlock {
 }
 
 impl Coefficients {
-    /// The dashpots' implicit correction of an explicit update `next` (the damping term
-    /// C (u_{n+1} - u_{n-1}) / 2dt solved DOF by DOF, and node by node for the coupled
-    /// ones: (I + R) u_{n+1} = next + R u_{n-1}); returns the energy they absorbed over the
-    /// step, (u_{n+1} - u_{n-1})^T C (u_{n+1} - u_{n-1}) / 4dt.
-    pub(super) fn damp(&self, u_prev: &[f64], u: &[f64], next: &mut [f64], dt: f64) -> f64 {
-        let mut loss = 0.0;
-        for &(d, c, r) in &self.dashpots {
+    /// The dashpots' implicit correction of an explicit update `next`: the damping term
+    /// C (u_{n+1} - u_{n-1}) / 2dt solved DOF by DOF, and node by node for the coupled ones,
+    /// (I + R) u_{n+1} = next + R u_{n-1}.
+    pub(super) fn damp(&self, u_prev: &[f64], u: &[f64], next: &mut [f64]) {
+        for &(d, _, r) in &self.dashpots {
             let q = next[d] - 2.0 * u[d] + u_prev[d];
             next[d] = (q + 2.0 * u[d] - (1.0 - r) * u_prev[d]) / (1.0 + r);
-            let du = next[d] - u_prev[d];
-            loss += c * du * du / (4.0 * dt);
         }
         for k in &self.coupled {
             let dofs = [2 * k.node, 2 * k.node + 1];
             let old = dofs.map(|d| u_prev[d]);
             let rhs = [0, 1].map(|i| next[dofs[i]] + k.r[i][0] * old[0] + k.r[i][1] * old[1]);
-            let new = [0, 1].map(|i| k.inverse[i][0] * rhs[0] + k.inverse[i][1] * rhs[1]);
-            let du = [new[0] - old[0], new[1] - old[1]];
             for i in 0..2 {
-                next[dofs[i]] = new[i];
+                next[dofs[i]] = k.inverse[i][0] * rhs[0] + k.inverse[i][1] * rhs[1];
+            }
+        }
+    }
+
+    /// The energy the dashpots absorbed over the step, (u_{n+1} - u_{n-1})^T C
+    /// (u_{n+1} - u_{n-1}) / 4dt, from the final u_{n+1} = `next`: after the contact
+    /// correction, which moves a damped DOF by its damped compliance.
+    pub(super) fn dashpot_loss(&self, u_prev: &[f64], next: &[f64], dt: f64) -> f64 {
+        let mut loss = 0.0;
+        for &(d, c, _) in &self.dashpots {
+            let du = next[d] - u_prev[d];
+            loss += c * du * du / (4.0 * dt);
+        }
+        for k in &self.coupled {
+            let du = [0, 1].map(|i| next[2 * k.node + i] - u_prev[2 * k.node + i]);
+            for i in 0..2 {
                 loss += du[i] * (k.c[i][0] * du[0] + k.c[i][1] * du[1]) / (4.0 * dt);
             }
         }
@@ -342,8 +351,9 @@ impl<D: Discretisation, C: ContactLaw> Stepper for CentralDifference<'_, D, C> {
             u_next[l] = tied;
             u_next[r] = tied;
         }
-        self.flows.dashpot_loss += self.coef.damp(u_prev, u, u_next, self.dt);
+        self.coef.damp(u_prev, u, u_next);
         self.contact.correct(u_prev, u_next, &mut self.flows)?;
+        self.flows.dashpot_loss += self.coef.dashpot_loss(u_prev, u_next, self.dt);
         self.add_source_work(step);
         Ok(())
     }

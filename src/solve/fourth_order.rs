@@ -210,7 +210,8 @@ impl<D: Discretisation> Stepper for FourthOrder<'_, D> {
         let mut next = std::mem::take(&mut self.u_next);
         self.for_each_force(step, |d, f| next[d] += self.coef.a[d] * f);
         let (u_prev, u) = (&self.u_prev, &self.u);
-        self.flows.dashpot_loss += self.coef.damp(u_prev, u, &mut next, self.dt);
+        self.coef.damp(u_prev, u, &mut next);
+        self.flows.dashpot_loss += self.coef.dashpot_loss(u_prev, &next, self.dt);
         let mut work = 0.0;
         self.for_each_force(step, |d, f| work += 0.5 * f * (next[d] - u_prev[d]));
         self.flows.source_work += work;

@@ -166,7 +166,8 @@ impl UnstructuredSem {
     /// dashpots, springs and ties name DOFs or nodes of the model; the dashpots and springs
     /// are sorted by node, each node once (as the gather and the stepper read them); no
     /// crack pair sits on a dashpot coupling x and y (its gap's compliance would couple them)
-    /// and no dashpot's node is on a tie but both of its DOFs' (as periodic edges tie them).
+    /// or on a periodic tie, and no dashpot's node is on a tie but both of its DOFs' (as
+    /// periodic edges tie them).
     pub fn check(&self) -> crate::error::Result<()> {
         use crate::error::Error;
         let n = self.dofs();
@@ -215,6 +216,23 @@ impl UnstructuredSem {
         }
         let tied: std::collections::BTreeSet<usize> =
             self.periodic.iter().flat_map(|&(l, r)| [l, r]).collect();
+        if let Some(pair) = self
+            .crack
+            .iter()
+            .flat_map(|c| &c.pairs)
+            .find(|p| tied.contains(&(2 * p.master)) || tied.contains(&(2 * p.slave)))
+        {
+            return Err(Error::invalid(
+                "edges.left, edges.right",
+                "periodic",
+                format!(
+                    "the crack reaches a periodic edge at nodes {} and {}: its faces' nodes \
+                     there have no single partner across the cell (a crack may cross the \
+                     cell's inside only)",
+                    pair.master, pair.slave
+                ),
+            ));
+        }
         if let Some(&(node, _)) = self
             .dashpots
             .iter()
