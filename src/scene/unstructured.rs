@@ -20,7 +20,7 @@ use std::collections::{HashMap, HashSet};
 
 /// The scene on spectral elements of `order` over `g`'s quadrilaterals.
 pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scene> {
-    refuse_unbuilt(spec, g)?;
+    refuse_unbuilt(spec)?;
     let bytes = gmsh_bytes(g)?;
     let (materials, groups) = gmsh_materials(spec, g)?;
     let mut physical: HashMap<i32, (usize, f64)> =
@@ -291,7 +291,7 @@ fn constrain(spec: &SceneSpec, edges: &Edges, mut model: UnstructuredSem) -> Res
 /// Refuses what spectral elements on a Gmsh mesh do not take yet, naming the field: a
 /// rectangular crack (the crack is `gmsh.crack_line`), losses. (A crack reaching a periodic
 /// edge is refused by [`UnstructuredSem::check`].)
-fn refuse_unbuilt(spec: &SceneSpec, g: &GmshSpec) -> Result<()> {
+fn refuse_unbuilt(spec: &SceneSpec) -> Result<()> {
     if spec.crack.is_some() {
         return Err(Error::invalid(
             "crack",

@@ -193,9 +193,7 @@ impl UnstructuredSem {
             Side::Left => [-1.0, 0.0],
             Side::Right => [1.0, 0.0],
         };
-        let sides = self.edge_sides(side);
-        sides
-            .into_iter()
+        (self.edge_sides(side).into_iter())
             .flat_map(|edge| self.edge_points(edge, |_| normal))
             .collect()
     }
@@ -280,8 +278,9 @@ impl UnstructuredSem {
     /// The springs of a viscous-spring boundary at `points`, each with its R (Liu et al.
     /// 2006, as the layered model's [`crate::sem::SemModel::viscous_springs`]): per point
     /// (G w / R) (ALPHA_N n n^T + ALPHA_T t t^T), G the element's shear modulus in the
-    /// boundary's frame ([`shear_modulus_across`]) and R the distance from the wave source; summed per node, sorted by node. An error names
-    /// `absorber.source_distance_m` where R is not positive.
+    /// boundary's frame ([`shear_modulus_across`]) and R the distance from the wave source;
+    /// summed per node, sorted by node. An error names `absorber.source_distance_m` where R
+    /// is not positive.
     pub fn viscous_springs(
         &self,
         points: &[(BoundaryPoint, f64)],

@@ -196,6 +196,13 @@ impl UnstructuredSem {
                 ));
             }
         }
+        self.check_crack_placement()
+    }
+
+    /// No crack pair sits on a dashpot coupling x and y or on a periodic tie, and no
+    /// dashpot's node has one DOF tied alone (for [`Self::check`], after the dashpots' order).
+    fn check_crack_placement(&self) -> crate::error::Result<()> {
+        use crate::error::Error;
         let coupled = |node: usize| {
             let at = self.dashpots.binary_search_by_key(&node, |b| b.0);
             at.is_ok_and(|k| self.dashpots[k].1[0][1] != 0.0)
