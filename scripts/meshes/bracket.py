@@ -15,7 +15,7 @@ per interlayer (8 through the thickness); 784 elements.
 Physical surfaces: 1 the epoxy interlayers, 2 the plies of the horizontal leg, 3 those of the
 vertical leg, 4 those of the corner (the scene turns each group's material axes along its
 own part: 0 and 90 degrees in the legs, round the corner's centre in the corner). Physical
-line 5: the delamination. Needs the `gmsh` Python package: python3 bracket.py (from this
+lines: 5 the delamination, 6 the horizontal leg's cut end (on the bounding box's right side). Needs the `gmsh` Python package: python3 bracket.py (from this
 directory)."""
 import math
 
@@ -105,6 +105,10 @@ gmsh.model.addPhysicalGroup(2, group("ply", "h"), 2)
 gmsh.model.addPhysicalGroup(2, group("ply", "v"), 3)
 gmsh.model.addPhysicalGroup(2, group("ply", "corner"), 4)
 gmsh.model.addPhysicalGroup(1, crack_curves, 5)
+ends = [c for s, _, part, *_ in blocks if part == "h"
+        for _, c in gmsh.model.getBoundary([(2, s)], oriented=False)
+        if gmsh.model.getBoundingBox(1, abs(c))[0] > OUTER + LEG - 1e-9]
+gmsh.model.addPhysicalGroup(1, sorted(set(abs(c) for c in ends)), 6)
 gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
 gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
 gmsh.model.mesh.generate(2)

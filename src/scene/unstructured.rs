@@ -73,8 +73,15 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
     };
     crate::budget::check()?;
     let conditions = edge_conditions(spec)?;
-    let lines = g
-        .absorbing_lines
+    let listed = &g.absorbing_lines;
+    if let Some(k) = (1..listed.len()).find(|&k| listed[..k].contains(&listed[k])) {
+        return Err(Error::invalid(
+            "gmsh.absorbing_lines",
+            listed[k],
+            "is given twice (it would absorb twice)",
+        ));
+    }
+    let lines = listed
         .iter()
         .map(|&group| {
             crate::mesh::gmsh::read_line_sides(&bytes, group)
@@ -100,10 +107,17 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
     } else {
         let mut weights = Vec::new();
         let mut others = Vec::new();
+        // each line's unit load, read once however often the list names it
+        let mut unit_loads = HashMap::new();
         for (i, source) in spec.sources.iter().enumerate() {
+            crate::budget::check()?;
             match *source {
                 SourceSpec::Line { line, scale } => {
-                    weights.extend(line_source(&model, &bytes, i, (line, scale))?);
+                    super::sources::check_scale(&format!("sources[{i}]"), scale)?;
+                    if !unit_loads.contains_key(&line) {
+                        unit_loads.insert(line, line_load(&model, &bytes, i, line)?);
+                    }
+                    weights.extend(unit_loads[&line].iter().map(|&(d, w)| (d, scale * w)));
                 }
                 _ => others.push(source.clone()),
             }
@@ -131,23 +145,21 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
     })
 }
 
-/// The nodal weights of line source `sources[i]` ([`SourceSpec::Line`] on physical line
-/// `line`, factor `scale`) per unit drive: the consistent load scale w n of a unit normal
-/// traction at each GLL point of the line.
-fn line_source(
+/// The nodal weights of a unit normal traction on physical line `line` (the load of line
+/// source `sources[i]`, [`SourceSpec::Line`], per unit scale and drive): w n at each GLL
+/// point of the line.
+fn line_load(
     model: &UnstructuredSem,
     bytes: &[u8],
     i: usize,
-    (line, scale): (i32, f64),
+    line: i32,
 ) -> Result<Vec<(usize, f64)>> {
-    let field = format!("sources[{i}].line");
-    super::sources::check_scale(&format!("sources[{i}]"), scale)?;
     let points = crate::mesh::gmsh::read_line_sides(bytes, line)
         .and_then(|segments| model.line_points(&segments))
-        .map_err(|e| Error::invalid(&field, line, e.to_string()))?;
+        .map_err(|e| Error::invalid(format!("sources[{i}].line"), line, e.to_string()))?;
     Ok(points
         .iter()
-        .flat_map(|p| [0, 1].map(|c| (2 * p.node + c, scale * p.weight * p.normal[c])))
+        .flat_map(|p| [0, 1].map(|c| (2 * p.node + c, p.weight * p.normal[c])))
         .collect())
 }
 
