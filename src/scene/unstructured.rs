@@ -16,6 +16,7 @@ use crate::laminate::Laminate;
 use crate::mesh::Mesh;
 use crate::mesh::Side;
 use crate::sem::unstructured::UnstructuredSem;
+use std::collections::hash_map::Entry;
 use std::collections::{HashMap, HashSet};
 
 /// The scene on spectral elements of `order` over `g`'s quadrilaterals.
@@ -114,10 +115,11 @@ pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scen
             match *source {
                 SourceSpec::Line { line, scale } => {
                     super::sources::check_scale(&format!("sources[{i}]"), scale)?;
-                    if !unit_loads.contains_key(&line) {
-                        unit_loads.insert(line, line_load(&model, &bytes, i, line)?);
-                    }
-                    weights.extend(unit_loads[&line].iter().map(|&(d, w)| (d, scale * w)));
+                    let load = match unit_loads.entry(line) {
+                        Entry::Occupied(read) => read.into_mut(),
+                        Entry::Vacant(new) => new.insert(line_load(&model, &bytes, i, line)?),
+                    };
+                    weights.extend(load.iter().map(|&(d, w)| (d, scale * w)));
                 }
                 _ => others.push(source.clone()),
             }
