@@ -12,8 +12,8 @@ use trnews::attenuation::{AttenuationSpec, QualitySpec};
 use trnews::material::Material;
 use trnews::mesh::Side;
 use trnews::scene::{
-    Absorber, DiscretisationSpec, EdgeCondition, EdgeConditions, LaminateSpec, LayerSpec,
-    MaterialSpec, ReceiverAt, ReceiverSpec, Scene, SceneSpec, SourceSpec,
+    DiscretisationSpec, EdgeCondition, EdgeConditions, LaminateSpec, LayerSpec, MaterialSpec,
+    ReceiverAt, ReceiverSpec, Scene, SceneSpec, SourceSpec,
 };
 use trnews::signal::Signal;
 use trnews::solve::{Integrator, RunConfig, RunOutput};
@@ -72,22 +72,6 @@ fn strip(order: usize, attenuation: Option<AttenuationSpec>) -> SceneSpec {
         width_m: WIDTH,
         element_size_x_m: WIDTH / 2.0,
         element_size_y_m: 0.15e-3,
-        absorbing: vec![],
-        edges: EdgeConditions {
-            bottom: Some(EdgeCondition::Absorbing),
-            top: Some(EdgeCondition::Free),
-            left: Some(EdgeCondition::Roller),
-            right: Some(EdgeCondition::Roller),
-        },
-        absorber: Absorber::Dashpot,
-        transducer: None,
-        crack: None,
-        sources: vec![SourceSpec::Normal {
-            edge: Side::Top,
-            x_m: None,
-            depth_m: None,
-            scale: 1.0,
-        }],
         receivers: ReceiverSpec {
             x_m: vec![],
             at: HEIGHTS
@@ -109,7 +93,7 @@ fn strip(order: usize, attenuation: Option<AttenuationSpec>) -> SceneSpec {
             rule_order_x: None,
         },
         attenuation,
-        ..Default::default()
+        ..common::plane_wave_scene()
     }
 }
 

@@ -96,6 +96,22 @@ layered_plate("gmsh_quad_plate", False)
 layered_plate("gmsh_quad_plate_crack", True)
 
 
+def write_curved_quads(name):
+    """Meshes the model as 9-node quadrilaterals (frontal-Delaunay for quads, recombined),
+    writes it to `name` (MSH 4.1) with its element counts printed, and closes Gmsh."""
+    gmsh.option.setNumber("Mesh.RecombineAll", 1)
+    gmsh.option.setNumber("Mesh.Algorithm", 8)
+    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.model.mesh.generate(2)
+    gmsh.model.mesh.setOrder(2)
+    types, tags, _ = gmsh.model.mesh.getElements(2)
+    counts = {gmsh.model.mesh.getElementProperties(t)[0]: len(k) for t, k in zip(types, tags)}
+    print(name + ":", counts)
+    gmsh.write(name)
+    gmsh.finalize()
+
+
 def unstructured_plate():
     """gmsh_quad_plate_unstructured.msh: the same two-layer plate as unstructured 9-node
     quadrilaterals of about 0.25 mm (0.5 mm elements each split into 4) (tests/scene_edges.rs runs the exact plane wave through
@@ -111,35 +127,12 @@ def unstructured_plate():
     gmsh.model.addPhysicalGroup(2, [lower], 1)
     gmsh.model.addPhysicalGroup(2, [upper], 2)
     gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5e-3)
-    gmsh.option.setNumber("Mesh.RecombineAll", 1)
     # recombination alone leaves a few triangles here: split every element into quads
     gmsh.option.setNumber("Mesh.SubdivisionAlgorithm", 1)
-    gmsh.option.setNumber("Mesh.Algorithm", 8)
-    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
-    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-    gmsh.model.mesh.generate(2)
-    gmsh.model.mesh.setOrder(2)
-    gmsh.write("gmsh_quad_plate_unstructured.msh")
-    gmsh.finalize()
+    write_curved_quads("gmsh_quad_plate_unstructured.msh")
 
 
 unstructured_plate()
-
-
-def write_curved_quads(name):
-    """Meshes the model as 9-node quadrilaterals (frontal-Delaunay for quads, recombined),
-    writes it to `name` (MSH 4.1) with its element counts printed, and closes Gmsh."""
-    gmsh.option.setNumber("Mesh.RecombineAll", 1)
-    gmsh.option.setNumber("Mesh.Algorithm", 8)
-    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
-    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-    gmsh.model.mesh.generate(2)
-    gmsh.model.mesh.setOrder(2)
-    types, tags, _ = gmsh.model.mesh.getElements(2)
-    counts = {gmsh.model.mesh.getElementProperties(t)[0]: len(k) for t, k in zip(types, tags)}
-    print(name + ":", counts)
-    gmsh.write(name)
-    gmsh.finalize()
 
 
 def hole_plate():
