@@ -61,7 +61,7 @@ pub enum Refinement {
     /// tied to h: order 2.
     ElementSizes,
     /// Spectral elements on the same elements at orders p - 1 and p - 2 along x (the scene's
-    /// orders across, its step). Their error falls exponentially with the order,
+    /// orders across, its step; on a Gmsh mesh, in both directions). Their error falls exponentially with the order,
     /// e_p ~ C rho^p: the formulas above hold with 2^-q = rho, the ratio per order, and d_1 / (2^q - 1) =
     /// d_1 rho / (1 - rho) is the geometric tail. The estimate expects a halving per order
     /// (order 1: the tail is d_1; at the slowest fall accepted, rho = 2^-0.5, it is 2.4 d_1).
@@ -86,7 +86,9 @@ impl Refinement {
     pub fn companions(self) -> &'static str {
         match self {
             Refinement::ElementSizes => "2h and 4h",
-            Refinement::Orders => "orders p-1 and p-2 along x and one more across",
+            Refinement::Orders => {
+                "orders p-1 and p-2 (along x and one more across on the layered rectangle)"
+            }
         }
     }
 

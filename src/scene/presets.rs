@@ -185,7 +185,15 @@ impl SceneSpec {
     /// it). Companions along x that chose their own rows and steps saw an error across of
     /// their own, 1.4-12x the true error at oblique incidence
     /// (docs/src/validation/normal-incidence.md).
+    ///
+    /// On a Gmsh mesh of quadrilaterals (`gmsh.order` p) the companions are the same mesh at
+    /// orders p - 1 and p - 2, in both directions (an unstructured element has no direction
+    /// across), at step `dt_s`; there is no third. A Gmsh mesh of triangles has none: its
+    /// mesh is the file's (an error).
     pub fn companions(&self, dt_s: f64) -> Result<Vec<SceneSpec>> {
+        if let Some(g) = &self.gmsh {
+            return self.mesh_order_companions(g, dt_s);
+        }
         match self.discretisation {
             DiscretisationSpec::T3 => Ok(vec![self.coarsened(2.0)?, self.coarsened(4.0)?]),
             DiscretisationSpec::Sem {
@@ -230,6 +238,31 @@ impl SceneSpec {
         }
     }
 
+    /// The companions of a Gmsh scene ([`SceneSpec::companions`]).
+    fn mesh_order_companions(&self, g: &GmshSpec, dt_s: f64) -> Result<Vec<SceneSpec>> {
+        let Some(order) = g.order else {
+            return Err(file_mesh(g));
+        };
+        if order < 3 {
+            return Err(Error::invalid(
+                "gmsh.order",
+                order,
+                "error estimates on spectral elements compare orders p, p - 1 and p - 2: \
+                 they need order >= 3",
+            ));
+        }
+        Ok([1, 2]
+            .map(|by| SceneSpec {
+                gmsh: Some(GmshSpec {
+                    order: Some(order - by),
+                    ..g.clone()
+                }),
+                time_step_s: Some(dt_s),
+                ..self.clone()
+            })
+            .into())
+    }
+
     /// The contact options of the crack, as the spec gives them (None: no crack, an open
     /// crack, or tied faces).
     pub fn contact(&self) -> Option<ContactOptions> {
@@ -243,9 +276,13 @@ impl SceneSpec {
         }
     }
 
-    /// How [`SceneSpec::companions`] refine this scene (along x; the companion across the
-    /// layers is the third).
+    /// How [`SceneSpec::companions`] refine this scene (on the layered rectangle along x, the
+    /// companion across the layers the third; on a Gmsh mesh of quadrilaterals the order in
+    /// both directions).
     pub fn refinement(&self) -> Refinement {
+        if self.gmsh.as_ref().is_some_and(|g| g.order.is_some()) {
+            return Refinement::Orders;
+        }
         match self.discretisation {
             DiscretisationSpec::T3 => Refinement::ElementSizes,
             DiscretisationSpec::Sem { .. } => Refinement::Orders,
@@ -257,12 +294,7 @@ impl SceneSpec {
     /// Gmsh scene has no element sizes to change (its mesh is the file's): an error.
     pub fn coarsened(&self, factor: f64) -> Result<SceneSpec> {
         if let Some(g) = &self.gmsh {
-            return Err(Error::invalid(
-                "gmsh.path",
-                &g.path,
-                "error estimates and tolerances refine the layered scene's mesh; a Gmsh \
-                 scene's mesh is the file's (run without error_estimate or tolerance)",
-            ));
+            return Err(file_mesh(g));
         }
         Ok(SceneSpec {
             element_size_x_m: self.element_size_x_m * factor,
@@ -289,4 +321,16 @@ impl SceneSpec {
             ..self.clone()
         }
     }
+}
+
+/// A Gmsh scene's element sizes are the file's: a tolerance, or an error estimate on its
+/// triangles, would coarsen them.
+fn file_mesh(g: &GmshSpec) -> Error {
+    Error::invalid(
+        "gmsh.path",
+        &g.path,
+        "tolerances, and error estimates on triangles, coarsen the layered scene's mesh; a \
+         Gmsh scene's mesh is the file's (run without tolerance; error estimates need \
+         spectral elements, gmsh.order)",
+    )
 }

@@ -660,6 +660,7 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
         });
         debugger.print(&format!("{at}{text}"))
     });
+    exact_float_comparisons(&mut engine);
     accuracy::register_types(&mut engine);
     signal::register_types(&mut engine);
     laminate::register_types(&mut engine);
@@ -671,6 +672,25 @@ fn build_engine(context: &Arc<HostContext>, max_operations: u64) -> Engine {
         engine.register_static_module(*name, build().into());
     }
     engine
+}
+
+/// IEEE comparisons of floats (and of a float with an integer) in scripts, in place of
+/// Rhai's, which take two numbers within f64::EPSILON of each other as equal: relative to the
+/// larger, but absolute where either is 0 or their product underflows. A script in SI units
+/// compares displacements of 1e-20 m and times of 1e-17 s, which Rhai's `x > 0.0` calls 0
+/// (`2e-25 > 0.0` is false there). Rhai's built-in operators skip registered ones unless
+/// its fast-operator mode is off.
+fn exact_float_comparisons(engine: &mut Engine) {
+    use rhai::{FLOAT, INT};
+    engine.set_fast_operators(false);
+    macro_rules! exact {
+        ($($op:tt),*) => {$(
+            engine.register_fn(stringify!($op), |x: FLOAT, y: FLOAT| x $op y);
+            engine.register_fn(stringify!($op), |x: FLOAT, y: INT| x $op y as FLOAT);
+            engine.register_fn(stringify!($op), |x: INT, y: FLOAT| (x as FLOAT) $op y);
+        )*};
+    }
+    exact!(==, !=, <, <=, >, >=);
 }
 
 /// Checks that a `--set` name is a valid Rhai identifier.

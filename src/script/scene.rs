@@ -198,7 +198,7 @@ mod scene_api {
         ))
     }
 
-    /// The companions of an error estimate (same laminate draw): on linear triangles the scene at 2x and 4x the element sizes; on spectral elements the same elements at orders order_x - 1 and order_x - 2 along x (every row's order across and the time step as the scene has them), then the same elements one order higher across every row (at its own step). Estimate a quantity from its values on the scene and on them, in this order, with `accuracy::scalar([value, ...], scene)`.
+    /// The companions of an error estimate (same laminate draw): on linear triangles the scene at 2x and 4x the element sizes; on spectral elements the same elements at orders order_x - 1 and order_x - 2 along x (every row's order across and the time step as the scene has them), then the same elements one order higher across every row (at its own step); on a Gmsh mesh of quadrilaterals (gmsh.order p) the same mesh at orders p - 1 and p - 2 at the scene's step. Estimate a quantity from its values on the scene and on them, in this order, with `accuracy::scalar([value, ...], scene)`.
     #[rhai_fn(global, pure, return_raw)]
     pub fn companions(ctx: NativeCallContext, scene: &mut SceneRef) -> Res<Array> {
         scene
