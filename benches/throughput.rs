@@ -96,6 +96,7 @@ struct Report {
     sweep: Vec<SweepRow>,
     sem: Vec<SemRow>,
     unstructured: Vec<UnstructuredRow>,
+    unstructured_gmsh: Vec<GmshMeshRow>,
     scene: Vec<SceneRow>,
     losses: Vec<LossRow>,
 }
@@ -187,6 +188,17 @@ struct UnstructuredRow {
     steps: usize,
     structured_step_ns_per_dof_step: f64,
     unstructured_step_ns_per_dof_step: f64,
+}
+
+/// The unstructured kernel's explicit step on a Gmsh mesh of distorted quadrilaterals.
+#[derive(Serialize)]
+struct GmshMeshRow {
+    order: usize,
+    elements: usize,
+    dofs: usize,
+    threads: usize,
+    steps: usize,
+    step_ns_per_dof_step: f64,
 }
 
 /// The rectangular element grid on `columns` x `rows` as 4-node quadrilaterals.
@@ -880,6 +892,46 @@ fn main() {
         }
     }
 
+    // The unstructured kernel alone on a Gmsh mesh of distorted curved quadrilaterals, the
+    // problem SPECFEM2D was timed on (benches/results/unstructured_kernel.md).
+    let mut gmsh_rows = Vec::new();
+    if run_section("unstructured") {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/scripts/gmsh_quad_plate_unstructured.msh"
+        );
+        let bytes = std::fs::read(path).expect("the unstructured plate's mesh");
+        let groups = [(1, (0, 0.0)), (2, (0, 0.0))].into_iter().collect();
+        let mesh = trnews::mesh::gmsh::read_quads(&bytes, &groups).expect("quadrilaterals");
+        let fabric = trnews::material::Orthotropic::preset("fabric_0_90")
+            .and_then(|m| m.reduce(Plane::Strain))
+            .expect("fabric");
+        let order = 4;
+        let model = trnews::sem::unstructured::UnstructuredSem::new(&mesh, vec![fabric], order)
+            .expect("unstructured");
+        let steps = if quick { 200 } else { 20000 };
+        let reps = if quick { 1 } else { 3 };
+        let dt = 0.5 * 2.0 / model.element_eigenvalue_bound().sqrt();
+        println!(
+            "\nThe unstructured kernel on tests/scripts/gmsh_quad_plate_unstructured.msh (fabric, order {order}, {} elements, {} DOFs), {steps} explicit steps (best of {reps}):",
+            model.elements(),
+            model.dofs()
+        );
+        for &t in &thread_counts {
+            let step = pool(t).install(|| kernel_time(&model, dt, steps, reps));
+            let ns = step * 1e9 / model.dofs() as f64;
+            println!("  {t} thread(s): {ns:6.2} ns/DOF/step");
+            gmsh_rows.push(GmshMeshRow {
+                order,
+                elements: model.elements(),
+                dofs: model.dofs(),
+                threads: t,
+                steps,
+                step_ns_per_dof_step: ns,
+            });
+        }
+    }
+
     // --- the real scene ----------------------------------------------------------------------
     let mut scene_rows = Vec::new();
     if run_section("scene") {
@@ -976,6 +1028,7 @@ fn main() {
         scene: scene_rows,
         sem: sem_rows,
         unstructured: unstructured_rows,
+        unstructured_gmsh: gmsh_rows,
         sweep: sweep_rows,
         rayon_threads_available: max_threads,
         assembly,
