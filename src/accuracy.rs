@@ -61,9 +61,9 @@ pub enum Refinement {
     /// tied to h: order 2.
     ElementSizes,
     /// Spectral elements on the same elements at orders p - 1 and p - 2 along x (the scene's
-    /// orders across, its step; on a Gmsh mesh, in both directions). Their error falls exponentially with the order,
-    /// e_p ~ C rho^p: the formulas above hold with 2^-q = rho, the ratio per order, and d_1 / (2^q - 1) =
-    /// d_1 rho / (1 - rho) is the geometric tail. The estimate expects a halving per order
+    /// orders across, its step; on a Gmsh mesh, in both directions). Their error falls
+    /// exponentially with the order, e_p ~ C rho^p: the formulas above hold with 2^-q = rho,
+    /// the ratio per order, and d_1 / (2^q - 1) = d_1 rho / (1 - rho) is the geometric tail. The estimate expects a halving per order
     /// (order 1: the tail is d_1; at the slowest fall accepted, rho = 2^-0.5, it is 2.4 d_1).
     /// A faster fall between the lower orders overstates the fall at the top order (the error
     /// from the orders across and from the time step does not fall with the order along x),
