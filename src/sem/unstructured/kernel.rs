@@ -91,7 +91,8 @@ macro_rules! with_points {
 }
 
 /// The scratch of [`UnstructuredSem::stiffness_times`]: every element point's force (x, y),
-/// allocated once per run.
+/// lane-major as the kernel writes it (`UnstructuredSem::lane_global`'s slots), allocated once
+/// per run.
 #[derive(Clone, Debug)]
 pub struct UnstructuredWorkspace {
     point_forces: Vec<[f64; 2]>,
@@ -101,7 +102,7 @@ impl UnstructuredSem {
     /// The scratch of [`UnstructuredSem::stiffness_times`].
     pub fn workspace(&self) -> UnstructuredWorkspace {
         UnstructuredWorkspace {
-            point_forces: vec![[0.0; 2]; self.global.len()],
+            point_forces: vec![[0.0; 2]; self.lane_global.len()],
         }
     }
 
@@ -328,7 +329,8 @@ impl UnstructuredSem {
     }
 
     /// Gathers the group's displacements, applies [`UnstructuredSem::forces_of`] and writes
-    /// the forces of its elements (the padding lanes' are dropped).
+    /// the forces of its elements, point by point and lane by lane (the padding lanes' are 0
+    /// and no node gathers them).
     #[inline(always)]
     fn group_kernel<const N: usize>(
         &self,
@@ -338,17 +340,19 @@ impl UnstructuredSem {
         forces: &mut [[f64; 2]],
     ) {
         let (mut ux, mut uy) = ([[[0.0; LANES]; N]; N], [[[0.0; LANES]; N]; N]);
-        let first = group * LANES * N * N;
-        for (p, &g) in self.global[first..first + forces.len()].iter().enumerate() {
-            let (l, q) = (p / (N * N), p % (N * N));
-            ux[q / N][q % N][l] = u[2 * g];
-            uy[q / N][q % N][l] = u[2 * g + 1];
+        let nodes = &self.lane_global[group * N * N * LANES..][..N * N * LANES];
+        for (q, lanes) in nodes.chunks_exact(LANES).enumerate() {
+            for (l, &g) in lanes.iter().enumerate() {
+                ux[q / N][q % N][l] = u[2 * g];
+                uy[q / N][q % N][l] = u[2 * g + 1];
+            }
         }
         let (mut fx, mut fy) = ([[[0.0; LANES]; N]; N], [[[0.0; LANES]; N]; N]);
         self.forces_of::<N>(group, d, (&ux, &uy), (&mut fx, &mut fy));
-        for (p, f) in forces.iter_mut().enumerate() {
-            let (l, q) = (p / (N * N), p % (N * N));
-            *f = [fx[q / N][q % N][l], fy[q / N][q % N][l]];
+        for (q, lanes) in forces.chunks_exact_mut(LANES).enumerate() {
+            for (l, f) in lanes.iter_mut().enumerate() {
+                *f = [fx[q / N][q % N][l], fy[q / N][q % N][l]];
+            }
         }
     }
 

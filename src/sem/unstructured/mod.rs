@@ -79,7 +79,11 @@ pub struct UnstructuredSem {
     stiffness: Vec<[Lanes; 6]>,
     /// The number of elements.
     elements: usize,
-    /// The element points holding global node g: `incidence[incidence_start[g]..
+    /// `global` lane-major, as the kernel reads it: the node of element e's point q at slot
+    /// `((e / LANES) * n^2 + q) * LANES + e % LANES`; padding lanes past the last element
+    /// name node 0 (their metric is 0, so their forces are 0, and no node gathers them).
+    lane_global: Vec<usize>,
+    /// The slots (as `lane_global`'s) holding global node g: `incidence[incidence_start[g]..
     /// incidence_start[g + 1]]`, ascending.
     incidence_start: Vec<usize>,
     incidence: Vec<usize>,
@@ -123,7 +127,8 @@ impl UnstructuredSem {
         let global = number_points(&mesh, order)?;
         let nodes = global.iter().max().map_or(0, |&g| g + 1);
         let mapped = map_points(&mesh, &materials, &gll, &global, nodes)?;
-        let (incidence_start, incidence) = incidence(&global, nodes);
+        let lane_global = lane_major(&global, order + 1);
+        let (incidence_start, incidence) = incidence(&global, order + 1, nodes);
         Ok(UnstructuredSem {
             order,
             positions_m: mapped.positions_m,
@@ -142,6 +147,7 @@ impl UnstructuredSem {
             crack: None,
             uncut_node: None,
             materials,
+            lane_global,
             incidence_start,
             incidence,
         })
@@ -410,8 +416,26 @@ fn side_point(order: usize, side: usize, t: usize) -> (usize, usize) {
     }
 }
 
-/// For each of `nodes` global nodes, the element points holding it, ascending (CSR).
-fn incidence(global: &[usize], nodes: usize) -> (Vec<usize>, Vec<usize>) {
+/// Element e's point q's slot in the kernel's lane-major order (see
+/// [`UnstructuredSem::lane_global`]), n points per direction.
+fn slot(e: usize, q: usize, n: usize) -> usize {
+    ((e / LANES) * n * n + q) * LANES + e % LANES
+}
+
+/// `global` (element-major, n points per direction) in the kernel's lane-major order, the
+/// padding lanes on node 0.
+fn lane_major(global: &[usize], n: usize) -> Vec<usize> {
+    let elements = global.len() / (n * n);
+    let mut lanes = vec![0; elements.div_ceil(LANES) * LANES * n * n];
+    for (point, &g) in global.iter().enumerate() {
+        lanes[slot(point / (n * n), point % (n * n), n)] = g;
+    }
+    lanes
+}
+
+/// Each node's slots (lane-major, [`slot`]), ascending, as (start, slots): node g's are
+/// `slots[start[g]..start[g + 1]]`.
+fn incidence(global: &[usize], n: usize, nodes: usize) -> (Vec<usize>, Vec<usize>) {
     let mut start = vec![0; nodes + 1];
     for &g in global {
         start[g + 1] += 1;
@@ -419,11 +443,11 @@ fn incidence(global: &[usize], nodes: usize) -> (Vec<usize>, Vec<usize>) {
     for g in 0..nodes {
         start[g + 1] += start[g];
     }
-    let mut fill = start.clone();
-    let mut incidence = vec![0; global.len()];
-    for (point, &g) in global.iter().enumerate() {
-        incidence[fill[g]] = point;
-        fill[g] += 1;
-    }
-    (start, incidence)
+    let mut slots: Vec<(usize, usize)> = global
+        .iter()
+        .enumerate()
+        .map(|(point, &g)| (g, slot(point / (n * n), point % (n * n), n)))
+        .collect();
+    slots.sort_unstable();
+    (start, slots.into_iter().map(|(_, s)| s).collect())
 }
