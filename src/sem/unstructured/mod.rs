@@ -12,6 +12,9 @@
 //! The stiffness product K u (see [`kernel`]) runs in two passes so that its sums are the
 //! same for any thread count: every element's forces at its own points, in parallel over
 //! elements; then every node's sum over the element points that hold it, in a fixed order.
+//! The element points are kept in the kernel's lane-major order (8 elements side by side,
+//! point by point), so that the kernel reads its nodes and writes its forces a SIMD vector at
+//! a time with no transposition.
 
 mod boundary;
 mod kernel;
