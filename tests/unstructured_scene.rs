@@ -202,7 +202,7 @@ fn a_crack_read_from_gmsh_runs_as_the_layered_crack_does() {
 /// 7 to 2.1e-4 to 3.4e-4, and with the Gmsh mesh at order 7 to 1.4e-4 to 2.3e-4; the run's
 /// own step costs it 1e-6 to 3e-6 (measured). Measured on the three receivers: true error
 /// 2.3e-3, 1.8e-3, 1.4e-3; the estimate, the bound d_1 = |Q_4 - Q_3| ("upper bound": the
-/// lower orders fall 8-12x apart), 2.8e-3, 2.7e-3, 2.7e-3, 1.23-1.88x the true error. Asserted:
+/// lower orders fall 7-13x apart), 2.8e-3, 2.7e-3, 2.7e-3, 1.23-1.88x the true error. Asserted:
 /// the verdict "reliable" or "upper bound", and the estimate within a factor 2 of the true
 /// error either way (the standard for a stated error).
 #[test]
