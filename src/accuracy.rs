@@ -82,16 +82,6 @@ impl Refinement {
         }
     }
 
-    /// The two companions, as the messages name them.
-    pub fn companions(self) -> &'static str {
-        match self {
-            Refinement::ElementSizes => "2h and 4h",
-            Refinement::Orders => {
-                "orders p-1 and p-2 (along x and one more across on the layered rectangle)"
-            }
-        }
-    }
-
     /// The first companion, as the messages name it.
     fn first_companion(self) -> &'static str {
         match self {

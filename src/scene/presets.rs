@@ -263,6 +263,17 @@ impl SceneSpec {
             .into())
     }
 
+    /// The companions of [`SceneSpec::companions`], as the messages name them.
+    pub fn companions_named(&self) -> &'static str {
+        if self.gmsh.as_ref().is_some_and(|g| g.order.is_some()) {
+            return "orders p-1 and p-2";
+        }
+        match self.discretisation {
+            DiscretisationSpec::T3 => "2h and 4h",
+            DiscretisationSpec::Sem { .. } => "orders p-1 and p-2 along x and one more across",
+        }
+    }
+
     /// The contact options of the crack, as the spec gives them (None: no crack, an open
     /// crack, or tied faces).
     pub fn contact(&self) -> Option<ContactOptions> {

@@ -88,7 +88,7 @@ pub(crate) fn companions_wanted(
                 "error estimate off: the companions at {} would add {:.0}% to the run \
                  time (auto allows {:.0}%); results carry no discretisation error \
                  (error_estimate = true turns it on)",
-                r.refinement().at(ctx)?.companions(),
+                r.companions_named().at(ctx)?,
                 100.0 * cost,
                 100.0 * AUTO_ESTIMATE_MAX_COST
             ));

@@ -422,6 +422,11 @@ impl Responder {
         Ok(self.scene()?.spec.refinement())
     }
 
+    /// The companions of this responder's scene, as the messages name them.
+    pub fn companions_named(&self) -> Result<&'static str> {
+        Ok(self.scene()?.spec.companions_named())
+    }
+
     /// Peak of the transmitted drive signals: the scene transmitter's peak traction (Pa), or
     /// a measured channel's drive peak.
     pub fn peak_drive(&self) -> f64 {
