@@ -835,6 +835,7 @@ fn main() {
 
     // --- unstructured spectral elements ---------------------------------------------------
     let mut unstructured_rows = Vec::new();
+    let mut gmsh_rows = Vec::new();
     if run_section("unstructured") {
         println!(
             "\nUnstructured vs structured spectral elements, same block, elements, order and DOFs (~100k): K u and the explicit step (best of reps):"
@@ -930,12 +931,8 @@ fn main() {
                 });
             }
         }
-    }
-
-    // The unstructured kernel alone on a Gmsh mesh of distorted curved quadrilaterals, the
-    // problem SPECFEM2D was timed on (benches/results/unstructured_kernel.md).
-    let mut gmsh_rows = Vec::new();
-    if run_section("unstructured") {
+        // The unstructured kernel alone on a Gmsh mesh of distorted curved quadrilaterals,
+        // the problem SPECFEM2D was timed on (benches/results/unstructured_kernel.md).
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/tests/scripts/gmsh_quad_plate_unstructured.msh"
@@ -943,9 +940,6 @@ fn main() {
         let bytes = std::fs::read(path).expect("the unstructured plate's mesh");
         let groups = [(1, (0, 0.0)), (2, (0, 0.0))].into_iter().collect();
         let mesh = trnews::mesh::gmsh::read_quads(&bytes, &groups).expect("quadrilaterals");
-        let fabric = trnews::material::Orthotropic::preset("fabric_0_90")
-            .and_then(|m| m.reduce(Plane::Strain))
-            .expect("fabric");
         let order = 4;
         let model = trnews::sem::unstructured::UnstructuredSem::new(&mesh, vec![fabric], order)
             .expect("unstructured");
