@@ -170,12 +170,7 @@ fn transmitter_distance(side: Side, source: [f64; 2], width: f64, height: f64) -
         Side::Top => height - source[1],
     };
     if d.is_nan() {
-        return Err(Error::invalid(
-            "absorber.source_distance_m",
-            "none",
-            "the first source is a line, which has no single point to measure R from: give \
-             the distance R from the wave source to the absorbing sides",
-        ));
+        return Err(super::sources::no_source_centre("sides"));
     }
     if d < 1e-6 * width.max(height) {
         return Err(Error::invalid(

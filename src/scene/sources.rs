@@ -234,6 +234,20 @@ pub(super) fn source_weights(on: &dyn Attach, sources: &[SourceSpec]) -> Result<
     Ok(weights)
 }
 
+/// The error where the viscous springs' R would be measured from the first source and that
+/// source is a line, which has no single point; `absorbing` names what absorbs ("sides",
+/// "lines").
+pub(super) fn no_source_centre(absorbing: &str) -> Error {
+    Error::invalid(
+        "absorber.source_distance_m",
+        "none",
+        format!(
+            "the first source is a line, which has no single point to measure R from: give \
+             the distance R from the wave source to the absorbing {absorbing}"
+        ),
+    )
+}
+
 pub(super) fn check_scale(field: &str, scale: f64) -> Result<()> {
     if !scale.is_finite() || scale == 0.0 {
         return Err(Error::invalid(

@@ -258,12 +258,7 @@ fn constrain(spec: &SceneSpec, edges: &Edges, mut model: UnstructuredSem) -> Res
     ) && !edges.lines.is_empty()
         && source[0].is_nan();
     if no_point {
-        return Err(Error::invalid(
-            "absorber.source_distance_m",
-            "none",
-            "the first source is a line, which has no single point to measure R from: give \
-             the distance R from the wave source to the absorbing lines",
-        ));
+        return Err(super::sources::no_source_centre("lines"));
     }
     let mut absorbs: HashSet<_> = points.iter().map(|p| (p.element, p.side)).collect();
     for (group, segments) in edges.lines {
