@@ -45,17 +45,16 @@ use crate::material::{Material, Relaxation};
 pub(crate) type Lanes<const W: usize> = [f64; W];
 
 /// What a stress kernel does at a quadrature point beyond the elastic weighted stress
-/// W C_U eps.
-pub(crate) trait PointLaw<const W: usize> {
-    /// What the law reads and writes per set of points (an element row, a chunk of triangles).
-    type State;
+/// W C_U eps, reading and writing `State` per set of points (an element row, a lane group of
+/// elements, a chunk of triangles).
+pub(crate) trait PointLaw<const W: usize, State> {
     /// Whether the kernel goes on to the nodal forces (laws that only read fields do not).
     const FORCES: bool = true;
     /// At point `q` of the set (for spectral elements point p of lane group g: q = g P + p,
     /// P points per element), of quadrature weight W and strain `eps` (xx, yy, engineering
     /// xy): adjusts the weighted stress `s`, W C_U eps on entry.
     fn at_point(
-        state: &mut Self::State,
+        state: &mut State,
         q: usize,
         weight: &Lanes<W>,
         eps: [&Lanes<W>; 3],
@@ -66,10 +65,9 @@ pub(crate) trait PointLaw<const W: usize> {
 /// No memory: the stress stays W C_U eps.
 pub(crate) struct Elastic;
 
-impl<const W: usize> PointLaw<W> for Elastic {
-    type State = ();
+impl<const W: usize, S> PointLaw<W, S> for Elastic {
     #[inline(always)]
-    fn at_point(_: &mut (), _: usize, _: &Lanes<W>, _: [&Lanes<W>; 3], _: [&mut Lanes<W>; 3]) {}
+    fn at_point(_: &mut S, _: usize, _: &Lanes<W>, _: [&Lanes<W>; 3], _: [&mut Lanes<W>; 3]) {}
 }
 
 /// The memory update of a time step and its stress, s -= W sum_l DC_l e_{l,n}, with the
@@ -122,21 +120,47 @@ pub(crate) fn newmark_stiffness_change(material: &Material, dt: f64) -> [[f64; 3
 
 /// One relaxation mechanism's constants at the run's step.
 #[derive(Clone, Debug)]
-struct Mechanism {
+struct Mechanism<S> {
     alpha: f64,
     beta: f64,
     /// dt / (4 tau_l), of the memory energy.
     dt_over_4tau: f64,
     /// DC_l = sum_k y_kl C_k (Pa).
-    relaxed: Block,
+    relaxed: S,
     /// DC_l tau_l / dt^2, of the loss: (1/tau_l) abar.DC_l abar with abar = tau_l Delta e_l / dt
     /// (Pa/s).
-    dissipative: Block,
+    dissipative: S,
+}
+
+impl<S: Clone> Mechanism<S> {
+    /// The constants of relaxation time `tau` and stiffness `relaxed` = DC_l at step `dt`;
+    /// `scaled(DC_l, f)` is f DC_l.
+    fn new(tau: f64, relaxed: S, dt: f64, scaled: impl Fn(&S, f64) -> S) -> Self {
+        let (alpha, beta) = trapezoid(tau, dt);
+        Mechanism {
+            alpha,
+            beta,
+            dt_over_4tau: dt / (4.0 * tau),
+            dissipative: scaled(&relaxed, tau / (dt * dt)),
+            relaxed,
+        }
+    }
+}
+
+/// A mechanism's stiffness DC_l (or a multiple of it) as the memory laws apply it, lane by
+/// lane: one material's in every lane ([`Block`]: an element row, a chunk of triangles), or
+/// each lane's own ([`LaneStiffness`]: a lane group of unstructured elements, each with its
+/// material and axes).
+pub(crate) trait Relaxed<const W: usize>: Clone + std::fmt::Debug {
+    /// DC x, lane by lane.
+    fn times(&self, x: &[Lanes<W>; 3]) -> [Lanes<W>; 3];
+    /// x.DC y, lane by lane.
+    fn form(&self, x: &[Lanes<W>; 3], y: &[Lanes<W>; 3]) -> Lanes<W>;
 }
 
 /// A plane stiffness that does not couple the normal strains to the shear strain, as every
-/// part of [`crate::attenuation`]'s splits: [C11, C12, C22, C66].
-type Block = [f64; 4];
+/// part of [`crate::attenuation`]'s splits in the material's axes: [C11, C12, C22, C66].
+pub(crate) type Block = [f64; 4];
 
 /// The block of a 3x3 stiffness (its entries coupling normal and shear strain are zero).
 fn block(c: &[[f64; 3]; 3]) -> Block {
@@ -144,16 +168,73 @@ fn block(c: &[[f64; 3]; 3]) -> Block {
     [c[0][0], c[0][1], c[1][1], c[2][2]]
 }
 
-/// The memory of a set of quadrature points of one viscoelastic material (an element row of
-/// spectral elements by lane group, or a chunk of triangles): per point the previous strain
-/// and the mechanisms' e_l, the mechanisms' constants, and the loss and energy sums per lane.
+impl<const W: usize> Relaxed<W> for Block {
+    #[inline(always)]
+    fn times(&self, x: &[Lanes<W>; 3]) -> [Lanes<W>; 3] {
+        // one simple loop per quantity, each a few vector operations across the lanes
+        let mut r = [[0.0; W]; 3];
+        for i in 0..W {
+            r[0][i] = self[0] * x[0][i] + self[1] * x[1][i];
+        }
+        for i in 0..W {
+            r[1][i] = self[1] * x[0][i] + self[2] * x[1][i];
+        }
+        for i in 0..W {
+            r[2][i] = self[3] * x[2][i];
+        }
+        r
+    }
+    #[inline(always)]
+    fn form(&self, x: &[Lanes<W>; 3], y: &[Lanes<W>; 3]) -> Lanes<W> {
+        std::array::from_fn(|i| {
+            self[0] * x[0][i] * y[0][i]
+                + self[1] * (x[0][i] * y[1][i] + x[1][i] * y[0][i])
+                + self[2] * x[1][i] * y[1][i]
+                + self[3] * x[2][i] * y[2][i]
+        })
+    }
+}
+
+/// A symmetric plane stiffness per lane, (C11, C12, C13, C22, C23, C33) each across the lanes:
+/// a turned material couples the normal strains to the shear strain. A lane of an elastic
+/// element (or a padding lane) holds 0.
 #[derive(Clone, Debug)]
-pub(crate) struct RowMemory<const W: usize> {
+pub(crate) struct LaneStiffness<const W: usize>(pub(crate) [Lanes<W>; 6]);
+
+impl<const W: usize> Relaxed<W> for LaneStiffness<W> {
+    #[inline(always)]
+    fn times(&self, x: &[Lanes<W>; 3]) -> [Lanes<W>; 3] {
+        let [c11, c12, c13, c22, c23, c33] = &self.0;
+        let mut r = [[0.0; W]; 3];
+        for i in 0..W {
+            r[0][i] = c11[i] * x[0][i] + c12[i] * x[1][i] + c13[i] * x[2][i];
+        }
+        for i in 0..W {
+            r[1][i] = c12[i] * x[0][i] + c22[i] * x[1][i] + c23[i] * x[2][i];
+        }
+        for i in 0..W {
+            r[2][i] = c13[i] * x[0][i] + c23[i] * x[1][i] + c33[i] * x[2][i];
+        }
+        r
+    }
+    #[inline(always)]
+    fn form(&self, x: &[Lanes<W>; 3], y: &[Lanes<W>; 3]) -> Lanes<W> {
+        let dy = self.times(y);
+        std::array::from_fn(|i| x[0][i] * dy[0][i] + x[1][i] * dy[1][i] + x[2][i] * dy[2][i])
+    }
+}
+
+/// The memory of a set of quadrature points (an element row of spectral elements by lane
+/// group, a lane group of unstructured elements, or a chunk of triangles): per point the
+/// previous strain and the mechanisms' e_l, the mechanisms' constants (their stiffness as
+/// `S`), and the loss and energy sums per lane.
+#[derive(Clone, Debug)]
+pub(crate) struct RowMemory<const W: usize, S = Block> {
     /// eps_{n-1} at point q, `[q]`.
     eps_prev: Vec<[Lanes<W>; 3]>,
     /// e_{l,n-1} at point q, `[q * L + l]`.
     e: Vec<[Lanes<W>; 3]>,
-    mechanisms: Vec<Mechanism>,
+    mechanisms: Vec<Mechanism<S>>,
     /// The step.
     dt: f64,
     /// d = W sum_l (1/tau_l) abar.DC_l abar per lane, summed over the steps since it was
@@ -165,21 +246,54 @@ pub(crate) struct RowMemory<const W: usize> {
 
 impl<const W: usize> RowMemory<W> {
     /// Zero memory for `points` quadrature points (of W lanes each) of a material relaxing
-    /// as `relaxation`, at step `dt`.
+    /// as `relaxation` (in its own axes), at step `dt`.
     pub(crate) fn new(relaxation: &Relaxation, points: usize, dt: f64) -> Self {
-        let mechanisms: Vec<Mechanism> = (relaxation.tau_s.iter().enumerate())
+        let mechanisms = (relaxation.tau_s.iter().enumerate())
             .map(|(l, &tau)| {
                 let relaxed = block(&relaxation.relaxed_by(l));
-                let (alpha, beta) = trapezoid(tau, dt);
-                Mechanism {
-                    alpha,
-                    beta,
-                    dt_over_4tau: dt / (4.0 * tau),
-                    relaxed,
-                    dissipative: relaxed.map(|d| d * tau / (dt * dt)),
-                }
+                Mechanism::new(tau, relaxed, dt, |b, f| b.map(|d| d * f))
             })
             .collect();
+        Self::with(mechanisms, points, dt)
+    }
+}
+
+impl<const W: usize> RowMemory<W, LaneStiffness<W>> {
+    /// Zero memory for `points` quadrature points of W lanes, lane i relaxing as
+    /// `relaxations[i]` (in the x-y axes: a turned material's) or elastic where `None`, at
+    /// step `dt`; `None` where every lane is elastic. The viscoelastic lanes share their
+    /// relaxation times (one band and one count of mechanisms per scene; checked by the
+    /// caller).
+    pub(crate) fn by_lane(
+        relaxations: [Option<&Relaxation>; W],
+        points: usize,
+        dt: f64,
+    ) -> Option<Self> {
+        let first = relaxations.iter().flatten().next()?;
+        let mechanisms = (first.tau_s.iter().enumerate())
+            .map(|(l, &tau)| {
+                let mut c = LaneStiffness([[0.0; W]; 6]);
+                for (i, r) in relaxations.iter().enumerate() {
+                    let Some(r) = r else { continue };
+                    debug_assert_eq!(r.tau_s, first.tau_s);
+                    let d = r.relaxed_by(l);
+                    let entries = [d[0][0], d[0][1], d[0][2], d[1][1], d[1][2], d[2][2]];
+                    for (lanes, value) in c.0.iter_mut().zip(entries) {
+                        lanes[i] = value;
+                    }
+                }
+                Mechanism::new(tau, c, dt, |c, f| {
+                    LaneStiffness(c.0.map(|l| l.map(|d| d * f)))
+                })
+            })
+            .collect();
+        Some(Self::with(mechanisms, points, dt))
+    }
+}
+
+impl<const W: usize, S: Relaxed<W>> RowMemory<W, S> {
+    /// Zero memory for `points` points with `mechanisms` at step `dt`.
+    fn with(mechanisms: Vec<Mechanism<S>>, points: usize, dt: f64) -> Self {
         let zero = [[0.0; W]; 3];
         RowMemory {
             eps_prev: vec![zero; points],
@@ -209,11 +323,10 @@ impl<const W: usize> RowMemory<W> {
     }
 }
 
-impl<const W: usize> PointLaw<W> for Viscous {
-    type State = RowMemory<W>;
+impl<const W: usize, S: Relaxed<W>> PointLaw<W, RowMemory<W, S>> for Viscous {
     #[inline(always)]
     fn at_point(
-        m: &mut RowMemory<W>,
+        m: &mut RowMemory<W, S>,
         q: usize,
         w: &Lanes<W>,
         eps: [&Lanes<W>; 3],
@@ -222,7 +335,6 @@ impl<const W: usize> PointLaw<W> for Viscous {
         let eps = [*eps[0], *eps[1], *eps[2]];
         let old = m.eps_prev[q];
         let count = m.mechanisms.len();
-        // sum_l DC_l e_{l,n}, and the loss of each lane
         // eps_{n-1} + eps_n, shared by the mechanisms
         let mut sum = [[0.0; W]; 3];
         for c in 0..3 {
@@ -254,19 +366,14 @@ impl<const W: usize> PointLaw<W> for Viscous {
                 }
             }
             *e = e_new;
-            let e = &e_new;
-            for i in 0..W {
-                relaxed[0][i] += d[0] * e[0][i] + d[1] * e[1][i];
+            let (dc_e, lost) = (d.times(&e_new), g.form(&step, &step));
+            for c in 0..3 {
+                for i in 0..W {
+                    relaxed[c][i] += dc_e[c][i];
+                }
             }
             for i in 0..W {
-                relaxed[1][i] += d[1] * e[0][i] + d[2] * e[1][i];
-            }
-            for i in 0..W {
-                relaxed[2][i] += d[3] * e[2][i];
-            }
-            for i in 0..W {
-                let [s0, s1, s2] = [step[0][i], step[1][i], step[2][i]];
-                loss[i] += g[0] * s0 * s0 + 2.0 * g[1] * s0 * s1 + g[2] * s1 * s1 + g[3] * s2 * s2;
+                loss[i] += lost[i];
             }
         }
         for i in 0..W {
@@ -279,11 +386,10 @@ impl<const W: usize> PointLaw<W> for Viscous {
     }
 }
 
-impl<const W: usize> PointLaw<W> for Start {
-    type State = RowMemory<W>;
+impl<const W: usize, S: Relaxed<W>> PointLaw<W, RowMemory<W, S>> for Start {
     const FORCES: bool = false;
     fn at_point(
-        m: &mut RowMemory<W>,
+        m: &mut RowMemory<W, S>,
         q: usize,
         _: &Lanes<W>,
         eps: [&Lanes<W>; 3],
@@ -293,11 +399,10 @@ impl<const W: usize> PointLaw<W> for Start {
     }
 }
 
-impl<const W: usize> PointLaw<W> for Probe {
-    type State = RowMemory<W>;
+impl<const W: usize, S: Relaxed<W>> PointLaw<W, RowMemory<W, S>> for Probe {
     const FORCES: bool = false;
     fn at_point(
-        m: &mut RowMemory<W>,
+        m: &mut RowMemory<W, S>,
         q: usize,
         w: &Lanes<W>,
         eps: [&Lanes<W>; 3],
@@ -322,9 +427,9 @@ impl<const W: usize> PointLaw<W> for Probe {
             }
             let d = &mech.relaxed;
             let (kept, strains, lagged) = (
-                form(d, &a_new, &a_old),
-                form(d, &eps, &old),
-                form(d, &a_old, &a_sum),
+                d.form(&a_new, &a_old),
+                d.form(&eps, &old),
+                d.form(&a_old, &a_sum),
             );
             for i in 0..W {
                 energy[i] += 0.5 * kept[i] - 0.5 * strains[i] + mech.dt_over_4tau * lagged[i];
@@ -336,10 +441,9 @@ impl<const W: usize> PointLaw<W> for Probe {
     }
 }
 
-impl<const W: usize> PointLaw<W> for History {
-    type State = RowMemory<W>;
+impl<const W: usize, S: Relaxed<W>> PointLaw<W, RowMemory<W, S>> for History {
     fn at_point(
-        m: &mut RowMemory<W>,
+        m: &mut RowMemory<W, S>,
         q: usize,
         w: &Lanes<W>,
         eps: [&Lanes<W>; 3],
@@ -348,13 +452,14 @@ impl<const W: usize> PointLaw<W> for History {
         let count = m.mechanisms.len();
         let mut h = [[0.0; W]; 3];
         for (mech, e) in m.mechanisms.iter().zip(&m.e[q * count..(q + 1) * count]) {
-            let d = &mech.relaxed;
-            for i in 0..W {
-                let x: [f64; 3] =
-                    std::array::from_fn(|c| mech.alpha * e[c][i] + mech.beta * eps[c][i]);
-                h[0][i] += d[0] * x[0] + d[1] * x[1];
-                h[1][i] += d[1] * x[0] + d[2] * x[1];
-                h[2][i] += d[3] * x[2];
+            let x: [Lanes<W>; 3] = std::array::from_fn(|c| {
+                std::array::from_fn(|i| mech.alpha * e[c][i] + mech.beta * eps[c][i])
+            });
+            let dc_x = mech.relaxed.times(&x);
+            for c in 0..3 {
+                for i in 0..W {
+                    h[c][i] += dc_x[c][i];
+                }
             }
         }
         for i in 0..W {
@@ -365,25 +470,23 @@ impl<const W: usize> PointLaw<W> for History {
     }
 }
 
-impl<const W: usize> PointLaw<W> for Relax {
-    type State = RowMemory<W>;
+impl<const W: usize, S: Relaxed<W>> PointLaw<W, RowMemory<W, S>> for Relax {
     const FORCES: bool = false;
     fn at_point(
-        m: &mut RowMemory<W>,
+        m: &mut RowMemory<W, S>,
         q: usize,
         w: &Lanes<W>,
         eps: [&Lanes<W>; 3],
         s: [&mut Lanes<W>; 3],
     ) {
-        <Viscous as PointLaw<W>>::at_point(m, q, w, eps, s);
+        <Viscous as PointLaw<W, RowMemory<W, S>>>::at_point(m, q, w, eps, s);
     }
 }
 
-impl<const W: usize> PointLaw<W> for Stored {
-    type State = RowMemory<W>;
+impl<const W: usize, S: Relaxed<W>> PointLaw<W, RowMemory<W, S>> for Stored {
     const FORCES: bool = false;
     fn at_point(
-        m: &mut RowMemory<W>,
+        m: &mut RowMemory<W, S>,
         q: usize,
         w: &Lanes<W>,
         eps: [&Lanes<W>; 3],
@@ -392,20 +495,10 @@ impl<const W: usize> PointLaw<W> for Stored {
         let eps = [*eps[0], *eps[1], *eps[2]];
         let count = m.mechanisms.len();
         for (mech, e) in m.mechanisms.iter().zip(&m.e[q * count..(q + 1) * count]) {
-            let (own, coupled) = (form(&mech.relaxed, e, e), form(&mech.relaxed, e, &eps));
+            let (own, coupled) = (mech.relaxed.form(e, e), mech.relaxed.form(e, &eps));
             for i in 0..W {
                 m.energy[i] += w[i] * (0.5 * own[i] - coupled[i]);
             }
         }
     }
-}
-
-/// x.B y for a block stiffness B, lane by lane.
-fn form<const W: usize>(b: &Block, x: &[Lanes<W>; 3], y: &[Lanes<W>; 3]) -> Lanes<W> {
-    std::array::from_fn(|i| {
-        b[0] * x[0][i] * y[0][i]
-            + b[1] * (x[0][i] * y[1][i] + x[1][i] * y[0][i])
-            + b[2] * x[1][i] * y[1][i]
-            + b[3] * x[2][i] * y[2][i]
-    })
 }

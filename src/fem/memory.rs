@@ -181,7 +181,7 @@ impl T3Memory {
 
     /// Law `L` at every group of every chunk (chunks in parallel): strains from `u`, the
     /// law's weighted stress, and with forces B^T s into the chunk's force slots.
-    fn pass<L: PointLaw<LANES, State = RowMemory<LANES>>>(&mut self, u: &[f64]) {
+    fn pass<L: PointLaw<LANES, RowMemory<LANES>>>(&mut self, u: &[f64]) {
         self.chunks.par_iter_mut().for_each(|chunk| {
             for (g, group) in chunk.lanes.iter().enumerate() {
                 let [mut e_xx, mut e_yy, mut g_xy, mut area] = [[0.0; LANES]; 4];

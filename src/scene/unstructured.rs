@@ -21,9 +21,12 @@ use std::collections::{HashMap, HashSet};
 
 /// The scene on spectral elements of `order` over `g`'s quadrilaterals.
 pub(super) fn build(spec: &SceneSpec, g: &GmshSpec, order: usize) -> Result<Scene> {
-    refuse_unbuilt(spec)?;
+    refuse_rectangular_crack(spec)?;
     let bytes = gmsh_bytes(g)?;
-    let (materials, groups) = gmsh_materials(spec, g)?;
+    let (mut materials, groups) = gmsh_materials(spec, g)?;
+    if let Some(attenuation) = &spec.attenuation {
+        crate::attenuation::attenuate(&mut materials, attenuation)?;
+    }
     let mut physical: HashMap<i32, (usize, f64)> =
         groups.iter().map(|(&tag, &m)| (tag, (m, 0.0))).collect();
     for (key, &degrees) in &g.angles_deg {
@@ -297,22 +300,15 @@ fn constrain(spec: &SceneSpec, edges: &Edges, mut model: UnstructuredSem) -> Res
     })
 }
 
-/// Refuses what spectral elements on a Gmsh mesh do not take yet, naming the field: a
-/// rectangular crack (the crack is `gmsh.crack_line`), losses. (A crack reaching a periodic
-/// edge is refused by [`UnstructuredSem::check`].)
-fn refuse_unbuilt(spec: &SceneSpec) -> Result<()> {
+/// Refuses a rectangular crack, naming the field: a Gmsh scene's crack is
+/// `gmsh.crack_line`. (A crack reaching a periodic edge is refused by
+/// [`UnstructuredSem::check`].)
+fn refuse_rectangular_crack(spec: &SceneSpec) -> Result<()> {
     if spec.crack.is_some() {
         return Err(Error::invalid(
             "crack",
             "a rectangular crack",
             "a Gmsh scene takes its crack from gmsh.crack_line: set crack: ()",
-        ));
-    }
-    if spec.attenuation.is_some() {
-        return Err(Error::invalid(
-            "attenuation",
-            "given",
-            "losses are not built on spectral elements of a Gmsh mesh yet",
         ));
     }
     Ok(())

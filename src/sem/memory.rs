@@ -70,7 +70,7 @@ impl SemModel {
             .zip(memory.par_iter_mut())
             .enumerate()
             .for_each(|(r, (row, memory))| match memory {
-                Some(m) => self.row_forces::<History>(r, u, row, m),
+                Some(m) => self.row_forces::<History, _>(r, u, row, m),
                 None => row.force.fill(0.0),
             });
         self.gather_lines(rows, out);
@@ -107,7 +107,7 @@ impl SemModel {
     }
 
     /// The row kernel with law `L` (one without forces) over the viscoelastic rows, in parallel.
-    fn memory_pass<L: PointLaw<LANES, State = RowMemory<LANES>>>(
+    fn memory_pass<L: PointLaw<LANES, RowMemory<LANES>>>(
         &self,
         u: &[f64],
         work: &mut SemWorkspace,
@@ -118,7 +118,7 @@ impl SemModel {
             .enumerate()
             .for_each(|(r, (row, memory))| {
                 if let Some(m) = memory {
-                    self.row_forces::<L>(r, u, row, m);
+                    self.row_forces::<L, _>(r, u, row, m);
                 }
             });
     }

@@ -454,13 +454,13 @@ impl SemModel {
                 .zip(memory.par_iter_mut())
                 .enumerate()
                 .for_each(|(r, (row, memory))| match memory {
-                    Some(m) => self.row_forces::<Viscous>(r, u, row, m),
-                    None => self.row_forces::<Elastic>(r, u, row, &mut ()),
+                    Some(m) => self.row_forces::<Viscous, _>(r, u, row, m),
+                    None => self.row_forces::<Elastic, _>(r, u, row, &mut ()),
                 });
         } else {
             rows.par_iter_mut()
                 .enumerate()
-                .for_each(|(r, row)| self.row_forces::<Elastic>(r, u, row, &mut ()));
+                .for_each(|(r, row)| self.row_forces::<Elastic, _>(r, u, row, &mut ()));
         }
         // springs, then the predictor, on a line of K u starting at DOF `first`
         let finish = |first: usize, line: &mut [f64], springs: &[(usize, f64)]| {
@@ -555,17 +555,17 @@ impl SemModel {
     /// number of points along x (so its loops over them have fixed length; the order was
     /// checked against [`MAX_ORDER`] when the model was built), and with AVX where the CPU
     /// has it (wider lanes, the same operations: bit-identical results).
-    fn row_forces<L: PointLaw<LANES>>(
+    fn row_forces<L: PointLaw<LANES, S>, S>(
         &self,
         r: usize,
         u: &[f64],
         row: &mut RowWork,
-        law: &mut L::State,
+        law: &mut S,
     ) {
         macro_rules! by_points {
             ($($n:literal)*) => {
                 match self.gll_x.order() + 1 {
-                    $($n => self.row_forces_dispatch::<$n, L>(r, u, row, law),)*
+                    $($n => self.row_forces_dispatch::<$n, L, S>(r, u, row, law),)*
                     n => unreachable!("{n} GLL points along x: above MAX_ORDER + 1"),
                 }
             };
@@ -573,50 +573,50 @@ impl SemModel {
         by_points!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
     }
 
-    fn row_forces_dispatch<const N: usize, L: PointLaw<LANES>>(
+    fn row_forces_dispatch<const N: usize, L: PointLaw<LANES, S>, S>(
         &self,
         r: usize,
         u: &[f64],
         row: &mut RowWork,
-        law: &mut L::State,
+        law: &mut S,
     ) {
         #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports AVX-512F (checked just above), the only requirement
             // of this target_feature function.
-            return unsafe { self.row_forces_avx512::<N, L>(r, u, row, law) };
+            return unsafe { self.row_forces_avx512::<N, L, S>(r, u, row, law) };
         }
         #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
         if std::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU supports AVX (checked just above), the only requirement of
             // this target_feature function.
-            return unsafe { self.row_forces_avx::<N, L>(r, u, row, law) };
+            return unsafe { self.row_forces_avx::<N, L, S>(r, u, row, law) };
         }
-        self.row_kernel::<N, L>(r, u, row, law);
+        self.row_kernel::<N, L, S>(r, u, row, law);
     }
 
     #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
     #[target_feature(enable = "avx512f")]
-    fn row_forces_avx512<const N: usize, L: PointLaw<LANES>>(
+    fn row_forces_avx512<const N: usize, L: PointLaw<LANES, S>, S>(
         &self,
         r: usize,
         u: &[f64],
         row: &mut RowWork,
-        law: &mut L::State,
+        law: &mut S,
     ) {
-        self.row_kernel::<N, L>(r, u, row, law);
+        self.row_kernel::<N, L, S>(r, u, row, law);
     }
 
     #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
     #[target_feature(enable = "avx")]
-    fn row_forces_avx<const N: usize, L: PointLaw<LANES>>(
+    fn row_forces_avx<const N: usize, L: PointLaw<LANES, S>, S>(
         &self,
         r: usize,
         u: &[f64],
         row: &mut RowWork,
-        law: &mut L::State,
+        law: &mut S,
     ) {
-        self.row_kernel::<N, L>(r, u, row, law);
+        self.row_kernel::<N, L, S>(r, u, row, law);
     }
 
     /// The elements of row `r`, `LANES` columns at a time: displacements gathered into
@@ -626,12 +626,12 @@ impl SemModel {
     /// material does beyond W C_U eps (nothing for [`Elastic`]); a law without forces stops
     /// at the stresses.
     #[inline(always)]
-    fn row_kernel<const N: usize, L: PointLaw<LANES>>(
+    fn row_kernel<const N: usize, L: PointLaw<LANES, S>, S>(
         &self,
         r: usize,
         u: &[f64],
         row: &mut RowWork,
-        law: &mut L::State,
+        law: &mut S,
     ) {
         let points = N * (self.gll_y[r].order() + 1);
         let RowWork {
@@ -647,7 +647,7 @@ impl SemModel {
         for (g, jx) in self.half_width.iter().enumerate() {
             self.gather::<N>(r, g * LANES, u, ux, uy);
             let fields = ([&*ux, &*uy], [&mut *a1, &mut *a2], &mut mirrored[..]);
-            self.stresses::<N, L>(r, jx, fields, [sxx, syy, sxy], (law, g * points));
+            self.stresses::<N, L, S>(r, jx, fields, [sxx, syy, sxy], (law, g * points));
             if L::FORCES {
                 let stresses = [&*sxx, &*syy, &*sxy];
                 self.scatter_forces::<N>(r, g * LANES, jx, stresses, [a1, a2], mirrored, force);
@@ -720,13 +720,13 @@ impl SemModel {
     /// point `first` (`law` = (its state, first)).
     #[allow(clippy::type_complexity)]
     #[inline(always)]
-    fn stresses<const N: usize, L: PointLaw<LANES>>(
+    fn stresses<const N: usize, L: PointLaw<LANES, S>, S>(
         &self,
         r: usize,
         jx: &Lanes,
         ([ux, uy], [ux_eta, uy_eta], mirrored): ([&[Lanes]; 2], [&mut [Lanes]; 2], &mut [Lanes]),
         [sxx, syy, sxy]: [&mut [Lanes]; 3],
-        (law, first): (&mut L::State, usize),
+        (law, first): (&mut S, usize),
     ) {
         let nby = ux.len() / N;
         self.derivative_y[r].apply_across::<N>(ux, mirrored, ux_eta);

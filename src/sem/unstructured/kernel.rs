@@ -7,7 +7,8 @@
 //!   f(i, j) = sum_k D[k][i] F_xi(k, j) + sum_l D[l][j] F_eta(i, l),
 //!   F_xi = w det J sigma . grad xi,  F_eta = w det J sigma . grad eta.
 
-use super::{Lanes, UnstructuredSem, LANES};
+use super::{GroupMemory, Lanes, UnstructuredSem, LANES};
+use crate::attenuation::memory::{Elastic, PointLaw, Viscous};
 use crate::solve::{Discretisation, NodeBlock};
 use rayon::prelude::*;
 
@@ -92,10 +93,12 @@ macro_rules! with_points {
 
 /// The scratch of [`UnstructuredSem::stiffness_times`]: every element point's force (x, y),
 /// lane-major as the kernel writes it (`UnstructuredSem::lane_global`'s slots), allocated once
-/// per run.
+/// per run; and the memory variables of each lane group, `Some` where one of its elements is
+/// viscoelastic (empty until a run starts them: [`UnstructuredSem::start_memory`]).
 #[derive(Clone, Debug)]
 pub struct UnstructuredWorkspace {
     point_forces: Vec<[f64; 2]>,
+    pub(super) memory: Vec<Option<GroupMemory>>,
 }
 
 impl UnstructuredSem {
@@ -103,17 +106,22 @@ impl UnstructuredSem {
     pub fn workspace(&self) -> UnstructuredWorkspace {
         UnstructuredWorkspace {
             point_forces: vec![[0.0; 2]; self.lane_global.len()],
+            memory: Vec::new(),
         }
     }
 
-    /// `out = K u`, bit-identical for any number of threads (see the module's doc).
+    /// `out = K u` (K of the unrelaxed stiffness C_U where a material is viscoelastic),
+    /// bit-identical for any number of threads (see the module's doc).
     pub fn stiffness_times(&self, u: &[f64], out: &mut [f64], work: &mut UnstructuredWorkspace) {
-        with_points!(self.order, N => self.element_pass::<N>(u, &mut work.point_forces));
+        let forces = &mut work.point_forces;
+        with_points!(self.order, N => self.law_pass::<N, Elastic>(u, forces, &mut []));
         self.gather(u, out, work, |_, ku| ku);
     }
 
     /// The central-difference predictor u_next = 2 u - u_prev - a .* (K u) (report eq 69),
-    /// fused into the gather of K u: one pass over the nodes instead of two.
+    /// fused into the gather of K u: one pass over the nodes instead of two. Where the run
+    /// started memory variables, K u includes their stress and the step updates them
+    /// ([`Viscous`]).
     pub fn explicit_update(
         &self,
         a: &[f64],
@@ -122,7 +130,11 @@ impl UnstructuredSem {
         u_next: &mut [f64],
         work: &mut UnstructuredWorkspace,
     ) {
-        with_points!(self.order, N => self.element_pass::<N>(u, &mut work.point_forces));
+        let UnstructuredWorkspace {
+            point_forces,
+            memory,
+        } = work;
+        with_points!(self.order, N => self.law_pass::<N, Viscous>(u, point_forces, memory));
         self.gather(u, u_next, work, |d, ku| 2.0 * u[d] - u_prev[d] - a[d] * ku);
     }
 
@@ -264,17 +276,56 @@ impl UnstructuredSem {
         d
     }
 
-    /// Every element's forces at its points from `u`, in parallel over chunks of elements,
-    /// LANES elements at a time.
-    fn element_pass<const N: usize>(&self, u: &[f64], point_forces: &mut [[f64; 2]]) {
+    /// The element kernel with law `L` (one without forces: [`crate::attenuation::memory`]'s
+    /// Start and Probe) over the lane groups with memory.
+    pub(super) fn memory_pass<L: PointLaw<LANES, GroupMemory>>(
+        &self,
+        u: &[f64],
+        work: &mut UnstructuredWorkspace,
+    ) {
+        let UnstructuredWorkspace {
+            point_forces,
+            memory,
+        } = work;
+        with_points!(self.order, N => self.law_pass::<N, L>(u, point_forces, memory));
+    }
+
+    /// Every element's forces at its points from `u` (for a law with forces), in parallel
+    /// over chunks of elements, LANES elements at a time: the lane groups with memory
+    /// variables in `memory` (empty where the run has none) with point law `L`, the others
+    /// elastic.
+    fn law_pass<const N: usize, L: PointLaw<LANES, GroupMemory>>(
+        &self,
+        u: &[f64],
+        point_forces: &mut [[f64; 2]],
+        memory: &mut [Option<GroupMemory>],
+    ) {
         let d = self.derivative_array::<N>();
-        point_forces
-            .par_chunks_mut(ELEMENT_CHUNK * N * N)
-            .enumerate()
-            .for_each(|(chunk, forces)| {
+        let groups = ELEMENT_CHUNK / LANES;
+        let chunks = point_forces.par_chunks_mut(ELEMENT_CHUNK * N * N);
+        if memory.is_empty() {
+            chunks.enumerate().for_each(|(chunk, forces)| {
                 for (k, group_forces) in forces.chunks_mut(LANES * N * N).enumerate() {
-                    let group = chunk * ELEMENT_CHUNK / LANES + k;
-                    self.group_forces::<N>(group, &d, u, group_forces);
+                    let group = chunk * groups + k;
+                    self.group_forces::<N, Elastic, _>(group, &d, u, group_forces, &mut ());
+                }
+            });
+            return;
+        }
+        chunks
+            .zip(memory.par_chunks_mut(groups))
+            .enumerate()
+            .for_each(|(chunk, (forces, memory))| {
+                let lane_groups = forces.chunks_mut(LANES * N * N).zip(memory);
+                for (k, (group_forces, memory)) in lane_groups.enumerate() {
+                    let group = chunk * groups + k;
+                    match memory {
+                        Some(m) => self.group_forces::<N, L, _>(group, &d, u, group_forces, m),
+                        None if L::FORCES => {
+                            self.group_forces::<N, Elastic, _>(group, &d, u, group_forces, &mut ())
+                        }
+                        None => {}
+                    }
                 }
             });
     }
@@ -282,62 +333,66 @@ impl UnstructuredSem {
     /// The forces of lane group `group`'s elements at their points, from `u`, with the widest
     /// SIMD the CPU offers (the same code compiled for AVX-512 and AVX, chosen at run time,
     /// as the layered kernel does).
-    fn group_forces<const N: usize>(
+    fn group_forces<const N: usize, L: PointLaw<LANES, S>, S>(
         &self,
         group: usize,
         d: &[[f64; N]; N],
         u: &[f64],
         forces: &mut [[f64; 2]],
+        law: &mut S,
     ) {
         #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports AVX-512F (checked just above), the only requirement
             // of this target_feature function.
-            return unsafe { self.group_forces_avx512::<N>(group, d, u, forces) };
+            return unsafe { self.group_forces_avx512::<N, L, S>(group, d, u, forces, law) };
         }
         #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
         if std::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU supports AVX (checked just above), the only requirement of
             // this target_feature function.
-            return unsafe { self.group_forces_avx::<N>(group, d, u, forces) };
+            return unsafe { self.group_forces_avx::<N, L, S>(group, d, u, forces, law) };
         }
-        self.group_kernel::<N>(group, d, u, forces);
+        self.group_kernel::<N, L, S>(group, d, u, forces, law);
     }
 
     #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
     #[target_feature(enable = "avx512f")]
-    fn group_forces_avx512<const N: usize>(
+    fn group_forces_avx512<const N: usize, L: PointLaw<LANES, S>, S>(
         &self,
         group: usize,
         d: &[[f64; N]; N],
         u: &[f64],
         forces: &mut [[f64; 2]],
+        law: &mut S,
     ) {
-        self.group_kernel::<N>(group, d, u, forces);
+        self.group_kernel::<N, L, S>(group, d, u, forces, law);
     }
 
     #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
     #[target_feature(enable = "avx")]
-    fn group_forces_avx<const N: usize>(
+    fn group_forces_avx<const N: usize, L: PointLaw<LANES, S>, S>(
         &self,
         group: usize,
         d: &[[f64; N]; N],
         u: &[f64],
         forces: &mut [[f64; 2]],
+        law: &mut S,
     ) {
-        self.group_kernel::<N>(group, d, u, forces);
+        self.group_kernel::<N, L, S>(group, d, u, forces, law);
     }
 
-    /// Gathers the group's displacements, applies [`UnstructuredSem::forces_of`] and writes
-    /// the forces of its elements, point by point and lane by lane (the padding lanes' are 0
-    /// and no node gathers them).
+    /// Gathers the group's displacements, applies [`UnstructuredSem::forces_of`] with law
+    /// `L` and (for a law with forces) writes the forces of its elements, point by point and
+    /// lane by lane (the padding lanes' are 0 and no node gathers them).
     #[inline(always)]
-    fn group_kernel<const N: usize>(
+    fn group_kernel<const N: usize, L: PointLaw<LANES, S>, S>(
         &self,
         group: usize,
         d: &[[f64; N]; N],
         u: &[f64],
         forces: &mut [[f64; 2]],
+        law: &mut S,
     ) {
         let (mut ux, mut uy) = ([[[0.0; LANES]; N]; N], [[[0.0; LANES]; N]; N]);
         let nodes = &self.lane_global[group * N * N * LANES..][..N * N * LANES];
@@ -348,7 +403,10 @@ impl UnstructuredSem {
             }
         }
         let (mut fx, mut fy) = ([[[0.0; LANES]; N]; N], [[[0.0; LANES]; N]; N]);
-        self.forces_of::<N>(group, d, (&ux, &uy), (&mut fx, &mut fy));
+        self.forces_of::<N, L, S>(group, d, (&ux, &uy), (&mut fx, &mut fy), law);
+        if !L::FORCES {
+            return;
+        }
         for (q, lanes) in forces.chunks_exact_mut(LANES).enumerate() {
             for (l, f) in lanes.iter_mut().enumerate() {
                 *f = [fx[q / N][q % N][l], fy[q / N][q % N][l]];
@@ -358,15 +416,18 @@ impl UnstructuredSem {
 
     /// The internal forces `(fx, fy)` of the LANES elements of lane group `group` at their
     /// points (i along xi, j along eta: `[j][i][lane]`) from their points' displacements
-    /// `(ux, uy)` (the module's formula, each array operation across the lanes).
+    /// `(ux, uy)` (the module's formula, each array operation across the lanes); the point
+    /// law `L` adds what the material does beyond W C_U eps at point j N + i of the group's
+    /// state `law` (nothing for [`Elastic`]; a law without forces stops at the stresses).
     #[allow(clippy::type_complexity)]
     #[inline(always)]
-    fn forces_of<const N: usize>(
+    fn forces_of<const N: usize, L: PointLaw<LANES, S>, S>(
         &self,
         group: usize,
         d: &[[f64; N]; N],
         (ux, uy): (&[[Lanes; N]; N], &[[Lanes; N]; N]),
         (fx, fy): (&mut [[Lanes; N]; N], &mut [[Lanes; N]; N]),
+        law: &mut S,
     ) {
         let metric = &self.metric[group * N * N..(group + 1) * N * N];
         let [c11, c12, c13, c22, c23, c33] = &self.stiffness[group];
@@ -387,22 +448,31 @@ impl UnstructuredSem {
                     }
                 }
                 let [xi_x, xi_y, eta_x, eta_y, w] = &metric[j * N + i];
+                let ([mut e_xx, mut e_yy, mut g_xy], [mut s_xx, mut s_yy, mut s_xy]) =
+                    ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
                 for l in 0..LANES {
-                    let e_xx = ux_xi[l] * xi_x[l] + ux_eta[l] * eta_x[l];
-                    let e_yy = uy_xi[l] * xi_y[l] + uy_eta[l] * eta_y[l];
-                    let g_xy = ux_xi[l] * xi_y[l]
+                    e_xx[l] = ux_xi[l] * xi_x[l] + ux_eta[l] * eta_x[l];
+                    e_yy[l] = uy_xi[l] * xi_y[l] + uy_eta[l] * eta_y[l];
+                    g_xy[l] = ux_xi[l] * xi_y[l]
                         + ux_eta[l] * eta_y[l]
                         + uy_xi[l] * xi_x[l]
                         + uy_eta[l] * eta_x[l];
-                    let s_xx = w[l] * (c11[l] * e_xx + c12[l] * e_yy + c13[l] * g_xy);
-                    let s_yy = w[l] * (c12[l] * e_xx + c22[l] * e_yy + c23[l] * g_xy);
-                    let s_xy = w[l] * (c13[l] * e_xx + c23[l] * e_yy + c33[l] * g_xy);
-                    f_xi[j][i][0][l] = s_xx * xi_x[l] + s_xy * xi_y[l];
-                    f_xi[j][i][1][l] = s_xy * xi_x[l] + s_yy * xi_y[l];
-                    f_eta[j][i][0][l] = s_xx * eta_x[l] + s_xy * eta_y[l];
-                    f_eta[j][i][1][l] = s_xy * eta_x[l] + s_yy * eta_y[l];
+                    s_xx[l] = w[l] * (c11[l] * e_xx[l] + c12[l] * e_yy[l] + c13[l] * g_xy[l]);
+                    s_yy[l] = w[l] * (c12[l] * e_xx[l] + c22[l] * e_yy[l] + c23[l] * g_xy[l]);
+                    s_xy[l] = w[l] * (c13[l] * e_xx[l] + c23[l] * e_yy[l] + c33[l] * g_xy[l]);
+                }
+                let stress = [&mut s_xx, &mut s_yy, &mut s_xy];
+                L::at_point(law, j * N + i, w, [&e_xx, &e_yy, &g_xy], stress);
+                for l in 0..LANES {
+                    f_xi[j][i][0][l] = s_xx[l] * xi_x[l] + s_xy[l] * xi_y[l];
+                    f_xi[j][i][1][l] = s_xy[l] * xi_x[l] + s_yy[l] * xi_y[l];
+                    f_eta[j][i][0][l] = s_xx[l] * eta_x[l] + s_xy[l] * eta_y[l];
+                    f_eta[j][i][1][l] = s_xy[l] * eta_x[l] + s_yy[l] * eta_y[l];
                 }
             }
+        }
+        if !L::FORCES {
+            return;
         }
         for j in 0..N {
             for i in 0..N {
@@ -441,7 +511,14 @@ impl UnstructuredSem {
                         let (mut ux, mut uy) = ([[[0.0; LANES]; N]; N], [[[0.0; LANES]; N]; N]);
                         [&mut ux, &mut uy][c][q / N][q % N] = [1.0; LANES];
                         let (mut fx, mut fy) = ([[[0.0; LANES]; N]; N], [[[0.0; LANES]; N]; N]);
-                        self.forces_of::<N>(group, &d, (&ux, &uy), (&mut fx, &mut fy));
+                        let fields = (&ux, &uy);
+                        self.forces_of::<N, Elastic, _>(
+                            group,
+                            &d,
+                            fields,
+                            (&mut fx, &mut fy),
+                            &mut (),
+                        );
                         for (sum, column) in sums.iter_mut().zip([fx, fy]) {
                             let rows = sum.as_flattened_mut();
                             for (s, k) in rows.iter_mut().zip(column.as_flattened()) {
@@ -495,6 +572,18 @@ impl Discretisation for UnstructuredSem {
     }
     fn check(&self) -> crate::error::Result<()> {
         UnstructuredSem::check(self)
+    }
+    fn shortest_relaxation_s(&self) -> Option<f64> {
+        UnstructuredSem::shortest_relaxation_s(self)
+    }
+    fn start_memory(&self, dt: f64, u_prev: &[f64], work: &mut UnstructuredWorkspace) {
+        UnstructuredSem::start_memory(self, dt, u_prev, work);
+    }
+    fn take_viscous_loss(&self, work: &mut UnstructuredWorkspace) -> f64 {
+        UnstructuredSem::take_viscous_loss(self, work)
+    }
+    fn memory_energy(&self, u: &[f64], work: &mut UnstructuredWorkspace) -> f64 {
+        UnstructuredSem::memory_energy(self, u, work)
     }
     /// The fused kernel: the predictor finished as each node's K u is gathered
     /// ([`UnstructuredSem::explicit_update`]).

@@ -18,6 +18,7 @@
 
 mod boundary;
 mod kernel;
+mod memory;
 
 pub use boundary::BoundaryPoint;
 #[cfg(test)]
@@ -25,6 +26,7 @@ mod tests;
 
 use super::gll::Gll;
 use super::MAX_ORDER;
+use crate::attenuation::memory::{LaneStiffness, RowMemory};
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::mesh::cut::CutSide;
@@ -99,6 +101,9 @@ const LANES: usize = 8;
 /// One value per element of a lane group.
 type Lanes = [f64; LANES];
 
+/// The memory variables of a lane group's elements, each with its own material and axes.
+type GroupMemory = RowMemory<LANES, LaneStiffness<LANES>>;
+
 /// Two positions of one node computed from two elements agree when they are closer than
 /// this fraction of the element's size: the elements share the side's geometry.
 const SHARED_POINT_TOLERANCE: f64 = 1e-9;
@@ -106,9 +111,10 @@ const SHARED_POINT_TOLERANCE: f64 = 1e-9;
 impl UnstructuredSem {
     /// Spectral elements of order `order` on `mesh` (validated here: see
     /// [`QuadMesh::validate`]) with `materials` indexed by the elements' `material`. Errors
-    /// name what is wrong: an order outside 1..=16, a viscoelastic material (not offered on
-    /// unstructured meshes yet), a side shared by more than two elements, two elements whose
-    /// shared side is not the same curve, a Jacobian <= 0 at a GLL point.
+    /// name what is wrong: an order outside 1..=16, viscoelastic materials with different
+    /// relaxation times (a scene's losses share one band and one count of mechanisms), a side
+    /// shared by more than two elements, two elements whose shared side is not the same
+    /// curve, a Jacobian <= 0 at a GLL point.
     pub fn new(mesh: &QuadMesh, materials: Vec<Material>, order: usize) -> Result<Self> {
         if !(1..=MAX_ORDER).contains(&order) {
             return Err(Error::invalid(
@@ -117,13 +123,7 @@ impl UnstructuredSem {
                 format!("must be 1..={MAX_ORDER}"),
             ));
         }
-        if let Some(m) = materials.iter().find(|m| m.relaxation.is_some()) {
-            return Err(Error::invalid(
-                "materials",
-                &m.name,
-                "is viscoelastic: losses are not offered on unstructured meshes yet",
-            ));
-        }
+        memory::check_shared_relaxation_times(&materials)?;
         let mut mesh = mesh.clone();
         mesh.validate(materials.len(), order + 2)?;
         let gll = Gll::new(order);
