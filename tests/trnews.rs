@@ -90,6 +90,27 @@ fn uncracked_focuses_symmetrically_and_delayed_prediction_is_exact() {
         println!("uncracked delayed misfit {:e}", d.misfit);
         assert!(d.misfit < 1e-9, "misfit {:e}", d.misfit);
     }
+    // Up to the last delay that keeps the first copy's y_TR inside the misfit window
+    // (after_focus_s - half window = 7 us here) the prediction stays exact; a longer train is
+    // refused, naming delays_s, where its prediction would lack the first copy's coda (it
+    // showed a misfit of 1e-3 on this linear scene before the check).
+    let longest = spec().after_focus_s - 3e-6;
+    let whole = |t: f64| (t / dt).floor() * dt;
+    let train = vec![(
+        vec![0.0, whole(longest / 2.0), whole(longest)],
+        vec![1.0; 3],
+    )];
+    let d = &delayed_tr_news(&responder, &tr, f, &train, 3e-6).unwrap()[0];
+    assert!(
+        d.misfit < 1e-9,
+        "misfit at the longest delay {:e}",
+        d.misfit
+    );
+    let too_long = vec![(vec![0.0, longest + 2.0 * dt], vec![1.0, 1.0])];
+    let e = delayed_tr_news(&responder, &tr, f, &too_long, 3e-6)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("delays_s") && e.contains("after_focus_s"), "{e}");
 }
 
 #[test]

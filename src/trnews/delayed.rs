@@ -188,6 +188,7 @@ fn delayed_once(
                 "delays must be finite and >= 0",
             ));
         }
+        check_prediction_covers_window(spec, delays, half_window_s)?;
         sources.push(signal::delay_and_sum(&focus.source, delays, amplitudes)?);
     }
     let duration = spec.focus_duration_s() + (max_delay_s / dt).round() * dt;
@@ -227,6 +228,33 @@ fn delayed_once(
         .collect()
 }
 
+/// The misfit window of a point ends `half_window_s` after its last copy's focus, and the
+/// linear prediction's first copy is y_TR as recorded, up to window_s + after_focus_s: the
+/// last delay plus the half window must stay within after_focus_s, else the prediction
+/// lacks the first copy's coda inside the window and a linear scene shows a misfit (an error
+/// naming `delays_s`).
+fn check_prediction_covers_window(
+    spec: &TrNewsSpec,
+    delays: &[f64],
+    half_window_s: f64,
+) -> Result<()> {
+    let last = longest_delay(delays);
+    if last + half_window_s > spec.after_focus_s {
+        return Err(Error::invalid(
+            "delays_s",
+            last,
+            format!(
+                "the last delay plus the misfit's half window ({half_window_s:e} s) must be at \
+                 most after_focus_s ({:e} s): y_TR is recorded to window_s + after_focus_s, so \
+                 the first copy's prediction would end inside the misfit window (use shorter \
+                 delays or a longer after_focus_s)",
+                spec.after_focus_s
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Delayed TR-NEWS over `points` as a sweep of work units (see [`crate::sweep`]): each point
 /// is stored when done, read back by a rerun, shared out by a shard and only read by a
 /// merge. Points are computed in parallel; each one runs over the sweep's longest delay, so
@@ -243,6 +271,9 @@ pub fn delayed_sweep(
         // A lab's recordings are looked up, not simulated: every point at once, so that one
         // run lists every delayed drive still to record.
         return Ok(delayed_tr_news(r, tr, focus, points, half_window_s)?);
+    }
+    for (delays, _) in points {
+        check_prediction_covers_window(&tr.spec, delays, half_window_s)?;
     }
     let max_delay_s = longest_delay(points.iter().flat_map(|p| &p.0));
     let specs = point_specs(r, tr, focus, points, half_window_s, max_delay_s)?;
