@@ -338,3 +338,71 @@ fn experiments_run_on_spectral_elements() {
     );
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// The scan's line variant (`--set line=bottom`: the focal points on the bottom face, and
+/// `--set line=1.2`: on the line 1.2 mm above the bottom edge, inside the body), 5 positions
+/// at smoke: every position focuses, the uncracked baseline's PI residual and delayed misfit
+/// are round-off and the cracked ones are not; a line outside the body or a word other than
+/// top and bottom is an error naming `line` or the receiver.
+#[test]
+fn a_scan_runs_along_the_bottom_face_and_along_a_line_inside() {
+    let out = std::env::temp_dir().join(format!("trnews-scan-line-{}", std::process::id()));
+    let scan = |line: &str| {
+        Command::new(env!("CARGO_BIN_EXE_trnews-script"))
+            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/scan.rhai"))
+            .args([
+                "--set",
+                "resolution=smoke",
+                "--set",
+                "positions=5",
+                "--quiet",
+                "--set",
+            ])
+            .arg(format!("line={line}"))
+            .arg("--out")
+            .arg(out.join(line))
+            .output()
+            .unwrap()
+    };
+    for line in ["bottom", "1.2"] {
+        let result = scan(line);
+        assert!(
+            result.status.success(),
+            "{line}: {}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+        let text = std::fs::read_to_string(out.join(line).join("plots/scan.csv")).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| {
+                let cells: Vec<&str> = l.split(',').collect();
+                [
+                    "pi_residual",
+                    "pi_residual_uncracked",
+                    "misfit",
+                    "misfit_uncracked",
+                ]
+                .map(|c| cells[column(c)].parse::<f64>().unwrap())
+                .to_vec()
+            })
+            .collect();
+        assert_eq!(rows.len(), 5, "{text}");
+        for r in &rows {
+            assert!(
+                r[0] > 1e-3 && r[1] < 1e-12 && r[2] > 1e-3 && r[3] < 1e-12,
+                "{line}: {r:?}"
+            );
+        }
+    }
+    for (line, named) in [("middle", "line = \"middle\""), ("9", "receivers.at[0]")] {
+        let result = scan(line);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(
+            !result.status.success() && stderr.contains(named),
+            "{line}: {stderr}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
