@@ -383,6 +383,16 @@ impl Relaxation {
     }
 }
 
+/// The shortest relaxation time of `materials` (s), `None` where all are elastic: what a
+/// body's step must follow ([`crate::attenuation::check_step`]).
+pub fn shortest_relaxation_s<'a>(materials: impl IntoIterator<Item = &'a Material>) -> Option<f64> {
+    materials
+        .into_iter()
+        .filter_map(|m| m.relaxation.as_ref())
+        .map(Relaxation::shortest_tau_s)
+        .reduce(f64::min)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

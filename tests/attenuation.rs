@@ -6,9 +6,10 @@
 
 mod common;
 
+use common::strong_losses;
 use rustfft::num_complex::Complex64;
 use std::f64::consts::PI;
-use trnews::attenuation::{AttenuationSpec, QualitySpec};
+use trnews::attenuation::AttenuationSpec;
 use trnews::material::Material;
 use trnews::mesh::Side;
 use trnews::scene::{
@@ -33,22 +34,6 @@ const HEIGHTS: [f64; 4] = [0.2113e-3, 0.7317e-3, 1.1e-3, 1.5e-3];
 const T0: f64 = 1.0e-6;
 const TAU: f64 = 0.25e-6;
 const DURATION: f64 = 6e-6;
-
-/// Strong losses, so that they change the traces by tens of percent: Q_P 20 and Q_S 10 in
-/// the fabric, 15 and 8 in the epoxy, over the report's band.
-fn attenuation() -> AttenuationSpec {
-    let q = |q_p, q_s| QualitySpec { q_p, q_s };
-    AttenuationSpec {
-        band_hz: [2e5, 2e6],
-        mechanisms: 3,
-        reference_hz: None,
-        quality: [
-            ("fabric_0_90".to_string(), q(20.0, 10.0)),
-            ("epoxy".to_string(), q(15.0, 8.0)),
-        ]
-        .into(),
-    }
-}
 
 fn ricker(t: f64) -> f64 {
     let a = (t - T0) / TAU;
@@ -159,7 +144,7 @@ fn relative_error(a: &[f64], reference: &[f64]) -> f64 {
 #[test]
 fn a_plane_wave_through_an_attenuating_stack_matches_the_complex_moduli() {
     let dt = 0.5e-9;
-    let (scene, out) = transmit(&strip(5, Some(attenuation())), dt, DURATION);
+    let (scene, out) = transmit(&strip(5, Some(strong_losses())), dt, DURATION);
     let (_, elastic) = transmit(&strip(5, None), dt, DURATION);
     let steps = out.traces[0].samples.len();
     let reference = exact(&scene.laminate.materials, dt, steps);
@@ -189,7 +174,7 @@ fn a_plane_wave_through_an_attenuating_stack_matches_the_complex_moduli() {
 const W_BOX: f64 = 1e-3;
 
 fn roller_box(order: usize) -> SceneSpec {
-    let mut quality = attenuation();
+    let mut quality = strong_losses();
     quality.quality.remove("fabric_0_90");
     SceneSpec {
         laminate: LaminateSpec::Homogeneous {
@@ -409,7 +394,7 @@ fn a_two_dimensional_field_keeps_the_ledger_and_is_thread_invariant() {
             ..Default::default()
         },
         crack: None,
-        ..strip(4, Some(attenuation()))
+        ..strip(4, Some(strong_losses()))
     };
     let t3 = SceneSpec {
         element_size_x_m: 50e-6,
@@ -520,10 +505,10 @@ fn t3(attenuation: Option<AttenuationSpec>) -> SceneSpec {
 /// h, dominates both), and its ledger closes to round-off.
 #[test]
 fn triangles_carry_the_losses_as_accurately_as_they_carry_elastic_waves() {
-    let dt = Scene::build(&t3(Some(attenuation())))
+    let dt = Scene::build(&t3(Some(strong_losses())))
         .unwrap()
         .default_dt_s();
-    let (scene, lossy) = transmit(&t3(Some(attenuation())), dt, DURATION);
+    let (scene, lossy) = transmit(&t3(Some(strong_losses())), dt, DURATION);
     let (plain_scene, elastic) = transmit(&t3(None), dt, DURATION);
     let steps = lossy.traces[0].samples.len();
     let exact_lossy = exact(&scene.laminate.materials, dt, steps);
@@ -554,9 +539,9 @@ fn the_fourth_order_step_and_a_step_beyond_the_band_refuse_losses() {
         element_size_x_m: 50e-6,
         element_size_y_m: 50e-6,
         discretisation: DiscretisationSpec::T3,
-        ..strip(1, Some(attenuation()))
+        ..strip(1, Some(strong_losses()))
     };
-    for spec in [strip(3, Some(attenuation())), t3] {
+    for spec in [strip(3, Some(strong_losses())), t3] {
         let scene = Scene::build(&spec).unwrap();
         let drive = Signal {
             dt_s: 1e-9,
@@ -600,7 +585,7 @@ fn the_fourth_order_step_and_a_step_beyond_the_band_refuse_losses() {
 #[test]
 fn newmark_carries_the_losses_as_accurately_as_elastic_waves() {
     let t3_dt = 4.0
-        * Scene::build(&t3(Some(attenuation())))
+        * Scene::build(&t3(Some(strong_losses())))
             .unwrap()
             .default_dt_s();
     type Case = (
@@ -616,7 +601,7 @@ fn newmark_carries_the_losses_as_accurately_as_elastic_waves() {
     ];
     for (name, spec, dt, consistent_mass) in cases {
         let newmark = Integrator::Newmark { consistent_mass };
-        let (scene, lossy) = transmit_with(&spec(Some(attenuation())), dt, DURATION, newmark);
+        let (scene, lossy) = transmit_with(&spec(Some(strong_losses())), dt, DURATION, newmark);
         let (plain_scene, elastic) = transmit_with(&spec(None), dt, DURATION, newmark);
         let steps = lossy.traces[0].samples.len();
         let exact_lossy = exact(&scene.laminate.materials, dt, steps);

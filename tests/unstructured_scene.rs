@@ -6,9 +6,9 @@
 
 mod common;
 
-use common::gmsh_mesh;
+use common::{gmsh_mesh, strong_losses};
 use trnews::accuracy::{Estimate, Refinement, Verdict};
-use trnews::attenuation::{AttenuationSpec, QualitySpec};
+use trnews::attenuation::AttenuationSpec;
 use trnews::contact::ContactOptions;
 use trnews::scene::{
     Body, CrackSpec, DiscretisationSpec, GmshSpec, LaminateSpec, LayerSpec, MaterialSpec,
@@ -70,22 +70,6 @@ fn from_gmsh(order: usize) -> SceneSpec {
             Some(order),
         )),
         ..around()
-    }
-}
-
-/// Strong losses, so that they change the traces by tens of percent: Q_P 20 and Q_S 10 in
-/// the fabric, 15 and 8 in the epoxy, over the report's band.
-fn strong_losses() -> AttenuationSpec {
-    let q = |q_p, q_s| QualitySpec { q_p, q_s };
-    AttenuationSpec {
-        band_hz: [2e5, 2e6],
-        mechanisms: 3,
-        reference_hz: None,
-        quality: [
-            ("fabric_0_90".to_string(), q(20.0, 10.0)),
-            ("epoxy".to_string(), q(15.0, 8.0)),
-        ]
-        .into(),
     }
 }
 

@@ -5,18 +5,15 @@
 
 use super::{RowWork, SemModel, SemWorkspace, LANES};
 use crate::attenuation::memory::{History, PointLaw, Probe, Relax, RowMemory, Start, Stored};
-use crate::material::Relaxation;
 use rayon::prelude::*;
 
 impl SemModel {
     /// The shortest relaxation time of the element rows' materials (s); `None` where all are
     /// elastic.
     pub fn shortest_relaxation_s(&self) -> Option<f64> {
-        self.row_material
-            .iter()
-            .filter_map(|&m| self.materials[m].relaxation.as_ref())
-            .map(Relaxation::shortest_tau_s)
-            .reduce(f64::min)
+        crate::material::shortest_relaxation_s(
+            self.row_material.iter().map(|&m| &self.materials[m]),
+        )
     }
 
     /// Zero memory variables for the viscoelastic rows at step `dt`, eps_{-1} from `u_prev`

@@ -217,10 +217,7 @@ impl Discretisation for Fem<'_> {
         }
     }
     fn shortest_relaxation_s(&self) -> Option<f64> {
-        (self.model.materials.iter())
-            .filter_map(|m| m.relaxation.as_ref())
-            .map(crate::material::Relaxation::shortest_tau_s)
-            .reduce(f64::min)
+        crate::material::shortest_relaxation_s(&self.model.materials)
     }
     fn start_memory(&self, dt: f64, u_prev: &[f64], work: &mut FemWorkspace) {
         work.memory = T3Memory::new(self.model, dt);

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
+use trnews::attenuation::{AttenuationSpec, QualitySpec};
 use trnews::fem::Model;
 use trnews::laminate::{Laminate, Layer};
 use trnews::material::{Material, Orthotropic, Plane};
@@ -517,5 +518,21 @@ pub fn gmsh_mesh(
         axes_round: Default::default(),
         absorbing_lines: vec![],
         bytes: None,
+    }
+}
+
+/// Strong losses, so that they change the traces by tens of percent: Q_P 20 and Q_S 10 in
+/// the fabric, 15 and 8 in the epoxy, 3 mechanisms over the report's band.
+pub fn strong_losses() -> AttenuationSpec {
+    let q = |q_p, q_s| QualitySpec { q_p, q_s };
+    AttenuationSpec {
+        band_hz: [2e5, 2e6],
+        mechanisms: 3,
+        reference_hz: None,
+        quality: [
+            ("fabric_0_90".to_string(), q(20.0, 10.0)),
+            ("epoxy".to_string(), q(15.0, 8.0)),
+        ]
+        .into(),
     }
 }

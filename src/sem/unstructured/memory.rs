@@ -16,11 +16,7 @@ impl UnstructuredSem {
     /// The shortest relaxation time of the elements' materials (s); `None` where all are
     /// elastic.
     pub fn shortest_relaxation_s(&self) -> Option<f64> {
-        self.materials
-            .iter()
-            .filter_map(|m| m.relaxation.as_ref())
-            .map(Relaxation::shortest_tau_s)
-            .reduce(f64::min)
+        crate::material::shortest_relaxation_s(&self.materials)
     }
 
     /// Zero memory variables for the lane groups holding a viscoelastic element, at step `dt`,
