@@ -935,19 +935,22 @@ fn stale_temp_files_of_dead_writers_are_removed() {
     assert!(dir.0.join("x.csv").is_file());
 }
 
-/// The time limit stops simulations that run on rayon's workers: a parallel TR-NEWS pass of two 2 ms transmissions (tens of seconds of
-/// work) and a delayed sweep whose points each simulate over a millisecond of delay, its first
-/// pass read back from the store of a previous run. Each must stop at its limit, not when the
-/// workers finish.
+/// The time limit stops simulations that run on rayon's workers: a parallel TR-NEWS pass of two
+/// 2 ms transmissions (tens of seconds of work) and a delayed sweep whose points each simulate
+/// 0.39 ms of delay beyond a 0.4 ms focus (the delay fits within after_focus_s, as delayed
+/// TR-NEWS requires), its first pass read back from the store of a previous run. Each must stop
+/// at its limit, not when the workers finish.
 #[test]
 fn time_limit_stops_parallel_passes_and_delayed_sweeps() {
     let dir = TempDir::new("hostile-parallel-limit");
     let script = "let r = trnews::simulating(scene::preset(\"smoke\", #{}));\n\
         let c = signal::chirp(2e5, 2e6, 5e-6, 5e-6, 1e-8);\n\
         if param(\"pass\", false) { r.respond_all([c, c.scale(-1.0)], 2e-3); }\n\
-        let tr = trnews::tr_news(r, trnews::preset_spec(\"smoke\"));\n\
+        let spec = trnews::preset_spec(\"smoke\");\n\
+        spec.after_focus_s = 4e-4;\n\
+        let tr = trnews::tr_news(r, spec);\n\
         let points = [];\n\
-        for i in 0..param(\"points\", 0) { points.push(#{delays: [0.0, 1e-3], amplitudes: [1.0, -1.0 * i]}); }\n\
+        for i in 0..param(\"points\", 0) { points.push(#{delays: [0.0, 3.9e-4], amplitudes: [1.0, -1.0 * i]}); }\n\
         if points.len() > 0 { trnews::delayed(r, tr, 3, points, 3e-6); }\n";
     let (err, elapsed) = run_binary(
         &dir.0,
@@ -976,7 +979,7 @@ fn time_limit_stops_parallel_passes_and_delayed_sweeps() {
         &["--threads", "2", "--time-limit", "2", "--set", "points=4"],
     );
     assert!(
-        err.contains("t.rhai:7:") && err.contains("time limit 2 s"),
+        err.contains("t.rhai:9:") && err.contains("time limit 2 s"),
         "{err}"
     );
     assert!(
