@@ -317,6 +317,17 @@ pub struct Columns {
 /// Parses a CSV file with a header row and numeric cells (the `csv` crate: RFC 4180 quoting,
 /// every row as long as the header). Errors name the line, the column's header and the text.
 pub fn parse_csv(path: &Path, bytes: &[u8]) -> Result<Columns, InputError> {
+    parse_csv_columns(path, bytes, None)
+}
+
+/// [`parse_csv`] keeping only the columns named in `wanted` (in the file's order), when given:
+/// only their cells must be numbers, so a table with text columns (a verdict, a note) reads.
+/// A wanted name the header lacks is an error listing the header.
+pub fn parse_csv_columns(
+    path: &Path,
+    bytes: &[u8],
+    wanted: Option<&[String]>,
+) -> Result<Columns, InputError> {
     let bad = |m: String| InputError::format(path, m);
     if let Some(line) = unclosed_quote_line(bytes) {
         return Err(bad(format!(
@@ -351,11 +362,24 @@ pub fn parse_csv(path: &Path, bytes: &[u8]) -> Result<Columns, InputError> {
             i + 1
         )));
     }
+    let keep: Vec<bool> = match wanted {
+        None => vec![true; headers.len()],
+        Some(names) => {
+            if let Some(missing) = names.iter().find(|n| !headers.contains(n)) {
+                return Err(bad(format!(
+                    "no column '{missing}' (columns: {})",
+                    headers.join(", ")
+                )));
+            }
+            headers.iter().map(|h| names.contains(h)).collect()
+        }
+    };
     let mut columns = vec![Vec::new(); headers.len()];
     for record in reader.records() {
         let record = record.map_err(|e| bad(e.to_string()))?;
         let line = record.position().map_or(0, |p| p.line());
-        for ((cell, column), header) in record.iter().zip(&mut columns).zip(&headers) {
+        let cells = record.iter().zip(&mut columns).zip(&headers).zip(&keep);
+        for (((cell, column), header), _) in cells.filter(|(_, &k)| k) {
             let v: f64 = cell.parse().map_err(|_| {
                 bad(format!(
                     "line {line}, column '{header}': '{cell}' is not a number"
@@ -369,6 +393,12 @@ pub fn parse_csv(path: &Path, bytes: &[u8]) -> Result<Columns, InputError> {
             column.push(v);
         }
     }
+    let (headers, columns) = headers
+        .into_iter()
+        .zip(columns)
+        .zip(keep)
+        .filter_map(|(hc, k)| k.then_some(hc))
+        .unzip();
     Ok(Columns { headers, columns })
 }
 
@@ -562,6 +592,16 @@ mod tests {
         assert!(e.contains("record") || e.contains("fields"), "{e}");
         let e = parse_csv(p(), b"t,a\n0,nan\n").unwrap_err().to_string();
         assert!(e.contains("not finite"), "{e}");
+        let only = ["a".to_string()];
+        let c = parse_csv_columns(p(), b"t,a,verdict\n0,1,off\n1,2,\n", Some(&only)).unwrap();
+        assert_eq!(
+            (c.headers, c.columns),
+            (vec!["a".to_string()], vec![vec![1.0, 2.0]])
+        );
+        let e = parse_csv_columns(p(), b"t,a\n0,1\n", Some(&["b".to_string()]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no column 'b' (columns: t, a)"), "{e}");
         let e = parse_csv(p(), b"t,t\n0,1\n").unwrap_err().to_string();
         assert!(e.contains("twice"), "{e}");
         assert!(parse_csv(p(), b"").is_err());

@@ -110,6 +110,9 @@ struct ReadOptions {
     /// CSV only: the column holding uniformly spaced times; the other columns become Signals
     /// on its step and start.
     time_column: Option<String>,
+    /// CSV only: read just these columns (with `time_column`, it too); the others may hold
+    /// text.
+    columns: Option<Vec<String>>,
 }
 
 /// A data file format and how many bytes of memory one byte of it can become at most: the
@@ -282,10 +285,10 @@ mod io_api {
     #[rhai_fn(name = "read_npy", return_raw)]
     pub fn read_npy_with(ctx: NativeCallContext, path: &str, options_map: Map) -> Res<Dynamic> {
         let opts: ReadOptions = options(&ctx, options_map, &ReadOptions::default(), "read_npy")?;
-        if opts.time_column.is_some() {
+        if opts.time_column.is_some() || opts.columns.is_some() {
             return Err(super::error(
                 &ctx,
-                "read_npy.time_column: only read_csv has a time column",
+                "read_npy.time_column, read_npy.columns: only read_csv has named columns",
             ));
         }
         let (full, bytes) = read_data(&ctx, path, super::Format::Npy)?;
@@ -321,7 +324,7 @@ mod io_api {
         read_csv_with(ctx, path, Map::new())
     }
 
-    /// read_csv with options #{dt_s, t0_s} (every column becomes a Signal on that step) or #{time_column} (the other columns become Signals on that uniformly spaced column's step and start).
+    /// read_csv with options #{dt_s, t0_s} (every column becomes a Signal on that step) or #{time_column} (the other columns become Signals on that uniformly spaced column's step and start), and #{columns: [names]} (read only these; the others may hold text).
     #[rhai_fn(name = "read_csv", return_raw)]
     pub fn read_csv_with(ctx: NativeCallContext, path: &str, options_map: Map) -> Res<Map> {
         let mut opts: ReadOptions =
@@ -333,7 +336,11 @@ mod io_api {
             ));
         }
         let (full, bytes) = read_data(&ctx, path, super::Format::Csv)?;
-        let table = input::parse_csv(&full, &bytes).at(&ctx)?;
+        let wanted = opts.columns.clone().map(|mut c| {
+            c.extend(opts.time_column.clone());
+            c
+        });
+        let table = input::parse_csv_columns(&full, &bytes, wanted.as_deref()).at(&ctx)?;
         drop(bytes);
         let values = table.columns.iter().map(Vec::len).sum();
         let signals = opts.dt_s.is_some() || opts.time_column.is_some();

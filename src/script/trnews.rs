@@ -752,6 +752,21 @@ mod trnews_api {
             .collect())
     }
 
+    /// Where two scans of one map (values at the same focus positions x_m, the transmitter on the right and on the left) put the crack: each view scaled from its floor (0) to its peak (1), the smaller of the two at each position located as by localise (a crack's shadow, beyond it as seen from the transmitter, shows in one view only): #{from_m, to_m, centre_m, length_m, peak_m}.
+    #[rhai_fn(return_raw)]
+    pub fn localise_sides(
+        ctx: NativeCallContext,
+        x_m: Array,
+        right: Array,
+        left: Array,
+    ) -> Res<Dynamic> {
+        let x = crate::script::convert::floats(&ctx, &x_m.into(), "x_m")?;
+        let r = crate::script::convert::floats(&ctx, &right.into(), "right")?;
+        let l = crate::script::convert::floats(&ctx, &left.into(), "left")?;
+        let found = crate::trnews::localise_sides(&x, &r, &l).at(&ctx)?;
+        to_dynamic(&ctx, &found)
+    }
+
     /// Where a scan's map (values at focus positions x_m, increasing) puts the crack: the run of positions around the map's peak above half its height over the map's floor (its smallest value), ends interpolated: #{from_m, to_m, centre_m, length_m, peak_m}.
     #[rhai_fn(return_raw)]
     pub fn localise(ctx: NativeCallContext, x_m: Array, values: Array) -> Res<Dynamic> {

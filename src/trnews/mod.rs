@@ -32,4 +32,6 @@ pub use delayed::{
 };
 pub use focus::{tr_news, Focus, FocusEstimates, TrNews, TrNewsSpec};
 pub use pulse_inversion::{pulse_inversion, PulseInversion};
-pub use scan::{localise, mean_frequency_hz, scan, Localisation, Scan, ScanDrive, ScanPoint};
+pub use scan::{
+    localise, localise_sides, mean_frequency_hz, scan, Localisation, Scan, ScanDrive, ScanPoint,
+};
