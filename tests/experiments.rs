@@ -536,3 +536,49 @@ fn a_scan_from_the_left_mirrors_the_mirrored_crack_and_both_views_locate_it() {
     );
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `scan.rhai` shared out as a Slurm array does (`--shard 1/2`, `--shard 2/2`, then
+/// `--merge`) at smoke with 4 positions. Array tasks run at once, so neither may find the
+/// other's positions stored: each must store the uncracked baseline's impulse response
+/// before it stops after its share (a merge simulates nothing). Run alone, the first shard
+/// leaves it stored; the merge computes nothing and writes the maps of one whole run.
+#[test]
+fn a_scan_in_two_shards_and_a_merge_gives_the_maps_of_one_run() {
+    let out = std::env::temp_dir().join(format!("trnews-scan-shards-{}", std::process::id()));
+    let run = |dir: &str, extra: &[&str]| {
+        let result = Command::new(env!("CARGO_BIN_EXE_trnews-script"))
+            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/scan.rhai"))
+            .args(["--set", "resolution=smoke", "--set", "positions=4", "--out"])
+            .arg(out.join(dir))
+            .args(extra)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr).into_owned();
+        assert!(result.status.success(), "{dir} {extra:?}: {stderr}");
+        stderr
+    };
+    run("whole", &[]);
+    run("shared", &["--shard", "1/2"]);
+    let baseline =
+        std::fs::read_dir(out.join("shared/points/impulse_response")).map_or(0, |d| d.count());
+    assert_eq!(
+        baseline, 1,
+        "the first shard left no impulse response stored"
+    );
+    run("shared", &["--shard", "2/2"]);
+    let merged = run("shared", &["--merge"]);
+    assert!(
+        merged.contains("4 points, 4 stored before, 0 computed here"),
+        "{merged}"
+    );
+    // Every column but the run time (measured) is the same, byte for byte.
+    let maps = |dir: &str| -> Vec<String> {
+        std::fs::read_to_string(out.join(dir).join("plots/scan.csv"))
+            .unwrap()
+            .lines()
+            .map(|l| l.rsplit_once(',').unwrap().0.to_string())
+            .collect()
+    };
+    assert_eq!(maps("whole"), maps("shared"));
+    let _ = std::fs::remove_dir_all(&out);
+}
