@@ -16,6 +16,19 @@ fn scripts() -> Vec<PathBuf> {
     v
 }
 
+/// `scripts/<script>` at smoke, quiet, writing under `out`; the caller adds its own arguments.
+fn at_smoke(script: &str, out: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_trnews-script"));
+    c.arg(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scripts")
+            .join(script),
+    )
+    .args(["--set", "resolution=smoke", "--quiet", "--out"])
+    .arg(out);
+    c
+}
+
 #[test]
 fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
     let scripts = scripts();
@@ -349,19 +362,9 @@ fn experiments_run_on_spectral_elements() {
 fn a_scan_runs_along_the_bottom_face_and_along_a_line_inside() {
     let out = std::env::temp_dir().join(format!("trnews-scan-line-{}", std::process::id()));
     let scan = |line: &str| {
-        Command::new(env!("CARGO_BIN_EXE_trnews-script"))
-            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/scan.rhai"))
-            .args([
-                "--set",
-                "resolution=smoke",
-                "--set",
-                "positions=5",
-                "--quiet",
-                "--set",
-            ])
+        at_smoke("scan.rhai", &out.join(line))
+            .args(["--set", "positions=5", "--set"])
             .arg(format!("line={line}"))
-            .arg("--out")
-            .arg(out.join(line))
             .output()
             .unwrap()
     };
@@ -419,14 +422,7 @@ fn a_scan_runs_along_the_bottom_face_and_along_a_line_inside() {
 fn a_scan_from_the_left_mirrors_the_mirrored_crack_and_both_views_locate_it() {
     let out = std::env::temp_dir().join(format!("trnews-scan-sides-{}", std::process::id()));
     let run = |script: &str, args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_trnews-script"))
-            .arg(
-                Path::new(env!("CARGO_MANIFEST_DIR"))
-                    .join("scripts")
-                    .join(script),
-            )
-            .args(["--set", "resolution=smoke", "--quiet", "--out"])
-            .arg(&out)
+        at_smoke(script, &out)
             .arg("--data")
             .arg(&out)
             .args(args.iter().flat_map(|a| ["--set", a]))
@@ -546,10 +542,8 @@ fn a_scan_from_the_left_mirrors_the_mirrored_crack_and_both_views_locate_it() {
 fn a_scan_in_two_shards_and_a_merge_gives_the_maps_of_one_run() {
     let out = std::env::temp_dir().join(format!("trnews-scan-shards-{}", std::process::id()));
     let run = |dir: &str, extra: &[&str]| {
-        let result = Command::new(env!("CARGO_BIN_EXE_trnews-script"))
-            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/scan.rhai"))
-            .args(["--set", "resolution=smoke", "--set", "positions=4", "--out"])
-            .arg(out.join(dir))
+        let result = at_smoke("scan.rhai", &out.join(dir))
+            .args(["--set", "positions=4"])
             .args(extra)
             .output()
             .unwrap();

@@ -444,13 +444,9 @@ mod tests {
     fn a_smoothed_rectangle_is_located_at_its_half_maximum() {
         let (c, length, w) = (3.1e-3, 2e-3, 0.2e-3);
         let x: Vec<f64> = (0..41).map(|i| 1e-3 + i as f64 * 0.125e-3).collect();
-        let sigma = w / (2.0f64.ln() * 2.0).sqrt();
-        let erf_like = |t: f64| (1.0 + erf(t / (sigma * 2f64.sqrt()))) / 2.0;
         let map: Vec<f64> = x
             .iter()
-            .map(|&x| {
-                0.02 + 0.1 * (erf_like(x - c + length / 2.0) - erf_like(x - c - length / 2.0))
-            })
+            .map(|&x| 0.02 + 0.1 * seen_through_spot(w, x, c - length / 2.0, c + length / 2.0))
             .collect();
         let l = localise(&x, &map).unwrap();
         assert!((l.centre_m - c).abs() < 0.0125e-3, "{l:?}");
@@ -466,9 +462,7 @@ mod tests {
     fn two_views_drop_the_shadows_each_casts_on_its_far_side() {
         let (c, length, w) = (8.3e-3, 2e-3, 0.2e-3);
         let x: Vec<f64> = (0..41).map(|i| 1e-3 + i as f64 * 0.35e-3).collect();
-        let sigma = w / (2.0f64.ln() * 2.0).sqrt();
-        let step = |t: f64| (1.0 + erf(t / (sigma * 2f64.sqrt()))) / 2.0;
-        let band = |x: f64, a: f64, b: f64| step(x - a) - step(x - b);
+        let band = |x: f64, a: f64, b: f64| seen_through_spot(w, x, a, b);
         let (a, b) = (c - length / 2.0, c + length / 2.0);
         let right: Vec<f64> = x
             .iter()
@@ -513,6 +507,14 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("finite"), "{e}");
+    }
+
+    /// The band [a, b] seen at x through a Gaussian spot of half width at half maximum w: the
+    /// band's indicator convolved with the spot, (erf((x - a) / s) - erf((x - b) / s)) / 2
+    /// with s = sqrt(2) sigma.
+    fn seen_through_spot(w: f64, x: f64, a: f64, b: f64) -> f64 {
+        let s = w / (2.0 * 2.0f64.ln()).sqrt() * 2f64.sqrt();
+        (erf((x - a) / s) - erf((x - b) / s)) / 2.0
     }
 
     /// erf to 1.5e-7 (Abramowitz and Stegun 7.1.26), for the test's smoothed rectangle.
