@@ -275,7 +275,7 @@ fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
     use trnews::scene::{DiscretisationKind, LaminateSpec, Resolution, SemPreset};
     use trnews::sem::SemModel;
     let spec = SceneSpec::preset(Resolution::Quick);
-    assert_eq!(spec.refinement(), Refinement::Orders);
+    assert_eq!(spec.refinement(), Refinement::Orders { top: 7 });
     let dt = 3.1e-9;
     let companions = spec.companions(dt).unwrap();
     let orders: Vec<DiscretisationSpec> = companions

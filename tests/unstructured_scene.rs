@@ -287,7 +287,8 @@ fn error_estimates_on_a_gmsh_mesh_hold_against_a_layered_reference() {
         .unwrap()
         .path
         .replace("gmsh_quad_plate.msh", "gmsh_quad_plate_unstructured.msh");
-    assert_eq!(spec.refinement(), Refinement::Orders);
+    let top = spec.gmsh.as_ref().unwrap().order.unwrap();
+    assert_eq!(spec.refinement(), Refinement::Orders { top });
     let main = Scene::build(&spec).unwrap();
     let dt = main.default_dt_s();
     let companions = spec.companions(dt).unwrap();
@@ -325,7 +326,7 @@ fn error_estimates_on_a_gmsh_mesh_hold_against_a_layered_reference() {
         let e = Estimate::waveform_of(
             &[&traces[k], &lower[0][k], &lower[1][k]],
             window,
-            Refinement::Orders,
+            spec.refinement(),
         )
         .unwrap();
         let on_main = trnews::signal::resample(&truth[k], dt).unwrap();

@@ -59,7 +59,7 @@ impl Estimate {
             verdict: Verdict::Propagated,
             // its own differences say nothing of this error: no split by source
             across: None,
-            slow_correlation: None,
+            correlation: None,
             ..own
         }
     }
@@ -100,7 +100,7 @@ mod tests {
             &trace(vec![1.0; 4]),
             &trace(vec![1.0; 4]),
             (0.0, 3.0),
-            Refinement::Orders,
+            Refinement::Orders { top: 7 },
         )
         .unwrap();
         (w.error, w.verdict) = (Some(e), Verdict::Reliable);
@@ -117,7 +117,7 @@ mod tests {
         let m = misfit(&s, &p);
         let (e_p, e_r) = (0.01, 0.05);
         // differences that change sign and grow: "refine" of its own
-        let own = Estimate::dimensionless(m, m + 0.003, m + 0.001, Refinement::Orders);
+        let own = Estimate::dimensionless(m, m + 0.003, m + 0.001, Refinement::Orders { top: 7 });
         assert_eq!(own.verdict, Verdict::Refine);
         let r: Vec<f64> = s.iter().zip(&p).map(|(a, b)| a - b).collect();
         let ratio = norm(&s) / norm(&p);
@@ -163,13 +163,13 @@ mod tests {
     /// keeps it; without a stated prediction error there is no bound.
     #[test]
     fn traces_route_own_estimates_and_missing_errors() {
-        let own = Estimate::dimensionless(0.1, 0.103, 0.101, Refinement::Orders);
+        let own = Estimate::dimensionless(0.1, 0.103, 0.101, Refinement::Orders { top: 7 });
         assert_eq!(own.verdict, Verdict::Refine);
         let mut refine = waveform(0.0);
         (refine.error, refine.verdict) = (None, Verdict::Refine);
         let b = Estimate::relative_misfit(own, &waveform(0.02), &waveform(0.01), &refine, 1.1);
         assert!((b.error.unwrap() - (0.02 * 1.1 + 0.01 + 0.1 * 0.01) / 0.99).abs() < 1e-15);
-        let linear = Estimate::dimensionless(1e-13, 2e-13, 1e-13, Refinement::Orders);
+        let linear = Estimate::dimensionless(1e-13, 2e-13, 1e-13, Refinement::Orders { top: 7 });
         let kept = Estimate::relative_misfit(
             linear,
             &waveform(0.02),
@@ -178,7 +178,8 @@ mod tests {
             1.0,
         );
         assert_eq!(kept, linear);
-        let converging = Estimate::dimensionless(0.1, 0.1004, 0.1012, Refinement::Orders);
+        let converging =
+            Estimate::dimensionless(0.1, 0.1004, 0.1012, Refinement::Orders { top: 7 });
         assert_eq!(converging.verdict, Verdict::Reliable);
         let kept = Estimate::relative_misfit(
             converging,

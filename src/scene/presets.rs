@@ -291,12 +291,12 @@ impl SceneSpec {
     /// companion across the layers the third; on a Gmsh mesh of quadrilaterals the order in
     /// both directions).
     pub fn refinement(&self) -> Refinement {
-        if self.gmsh.as_ref().is_some_and(|g| g.order.is_some()) {
-            return Refinement::Orders;
+        if let Some(top) = self.gmsh.as_ref().and_then(|g| g.order) {
+            return Refinement::Orders { top };
         }
         match self.discretisation {
             DiscretisationSpec::T3 => Refinement::ElementSizes,
-            DiscretisationSpec::Sem { .. } => Refinement::Orders,
+            DiscretisationSpec::Sem { order_x, .. } => Refinement::Orders { top: order_x },
         }
     }
 
