@@ -17,9 +17,10 @@
 //! `alternating` below). Waves that travel many wavelengths converge late (their phase
 //! error grows with distance), which is exactly when the check matters. On spectral elements
 //! a waveform's error along x is fitted instead, wherever it falls by at least 16% per order
-//! (the tail fit, `fitted_tail` below; a fast fall from low-order companions keeps the bound): its three runs give three distances, enough to tell
-//! how far the orders' errors are aligned. A scalar's fall slower than a halving per order
-//! (the contact at GLL nodes) gets the same fit with its errors on one line.
+//! (the tail fit, `fitted_tail` below; a fast fall from low-order companions keeps the
+//! bound): its three runs give three distances, enough to tell how far the orders' errors
+//! are aligned. A scalar's fall slower than a halving per order (the contact at GLL nodes)
+//! gets the same fit with its errors on one line.
 //!
 //! For waveforms the differences are relative L2 norms over a window,
 //! d_1 = ||y_h - y_2h|| / ||y_h||, d_2 = ||y_2h - y_4h|| / ||y_h||, and the same formulas
@@ -71,8 +72,9 @@ pub enum Refinement {
     /// so d_1 is about sqrt(E_p^2 + E_p-1^2)): its tail is fitted to the three runs'
     /// differences with the correlation they show ([`fitted_tail`]), at any fall down to
     /// [`SLOWEST_FALL`] per order (a fall faster than a halving from companions below order
-    /// [`FAST_FALL_FROM_ORDER`]: the bound d_1). A scalar expects a halving per order (order 1: the tail is
-    /// d_1); a faster fall gives the bound d_1, a slower one the tail of aligned errors.
+    /// [`FAST_FALL_FROM_ORDER`]: the bound d_1). A scalar expects a halving per order (order
+    /// 1: the tail is d_1); a faster fall gives the bound d_1, a slower one the tail of
+    /// aligned errors.
     /// docs/src/validation/default-experiment.md checks each against a converged reference.
     Orders {
         /// The main run's order p (along x on the layered rectangle, in both directions on a
@@ -443,10 +445,10 @@ impl Estimate {
             (Some(a), _, _) => format!("; {} {a:.2e}", Source::Across.name()),
             _ => String::new(),
         };
-        let slow = self.correlation.map_or(String::new(), |c| {
+        let fitted = self.correlation.map_or(String::new(), |c| {
             format!(", tail along x fitted: consecutive orders' errors correlate {c:.2}")
         });
-        format!("observed order {order}{slow}{across}")
+        format!("observed order {order}{fitted}{across}")
     }
 
     /// "1.2300e-2 +- 4.50e-4 (observed order 1.90)", "... (error unknown, ...: refine)";
@@ -613,7 +615,8 @@ struct FittedTail {
 /// E_p-1, E_p-2 have sizes a, a / rho_1, a / (rho_1 rho_2) and consecutive errors correlate c
 /// (E_p and E_p-2: c^2). Then
 ///
-///   d_1^2 = a^2 (1 + rho_1^-2 - 2 c / rho_1),  d_13^2 = a^2 (1 + (rho_1 rho_2)^-2 - 2 c^2 / (rho_1 rho_2)),
+///   d_1^2 = a^2 (1 + rho_1^-2 - 2 c / rho_1),
+///   d_13^2 = a^2 (1 + (rho_1 rho_2)^-2 - 2 c^2 / (rho_1 rho_2)),
 ///
 /// with d_13 = |Q_p - Q_p-2| the third difference (`None` for a scalar whose differences keep
 /// their sign: its errors lie on one line, c = 1; with a sign change, [`alternating`]). At a
@@ -624,7 +627,7 @@ struct FittedTail {
 /// sqrt(1 + rho_1^2). Where it is used: a waveform's falls of 16% per order or faster
 /// ([`Estimate::waveform`]), a scalar's slow falls only. Measured c: 0.37-0.98 on the default
 /// experiment's cracked traces, where the contact at GLL nodes makes the error fall 21-30%
-/// per order (docs/src/validation/default-experiment.md), and -0.7 to 0.3 for plane waves,
+/// per order (docs/src/validation/default-experiment.md), and -0.7 to 0.4 for plane waves,
 /// whose phase errors at consecutive orders are far from aligned (tests/estimates.rs,
 /// tests/along_layers.rs). `None` when the differences do not fall by [`SLOWEST_FALL`] per
 /// order or no c in [-1, 1] fits them.
