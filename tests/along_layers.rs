@@ -17,9 +17,10 @@
 //! Lysmer dashpots (rho c: exact for this wave) and is far enough away that their reflection
 //! would not return within the record.
 //!
-//! c is the laminate's slowest wave (epoxy's S speed, 1.1 km/s): the shortest wavelength along
-//! x that the preset must resolve (0.55 mm at 2 MHz, about one 0.5 mm element). The discrete
-//! field is y-uniform too (each layer's stiffness and mass along x scale by its density), so
+//! c is the laminate's slowest wave (epoxy's S speed, 1.05 km/s): the shortest wavelength
+//! along x that the preset must resolve (0.52 mm at 2 MHz, about one 0.5 mm element); and the
+//! plies' S speed (1.77 km/s), the slowest of the waves the plies carry along the laminate.
+//! The discrete field is y-uniform too (each layer's stiffness and mass along x scale by its density), so
 //! the orders across see nothing and the error is the one along x and in time: the test
 //! checks that the estimate's companion across states none and its companions along x see it.
 
@@ -47,7 +48,8 @@ const PAIRS: usize = 3;
 /// (2 L - 12 mm) / c = 55 us, past the record and the transforms' margin.
 const LENGTH: f64 = 36e-3;
 
-/// Distances of the receivers from the loaded edge (m): 7 and 22 wavelengths at 2 MHz.
+/// Distances of the receivers from the loaded edge (m): 8 and 23 wavelengths of epoxy's S
+/// wave at 2 MHz.
 const RECEIVERS_X: [f64; 2] = [4e-3, 12e-3];
 
 /// Recorded duration (s): the wave reaches the far receiver after 11 us; the band's ringing
