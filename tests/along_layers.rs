@@ -246,12 +246,7 @@ fn run(strip: &Strip, dt: f64) -> Run {
     let v: Vec<Signal> = output
         .traces
         .iter()
-        .map(|t| {
-            td.cut_back(
-                &td.remove_from_trace(t, Quantity::Velocity).unwrap(),
-                &config,
-            )
-        })
+        .map(|t| td.recorded(t, Quantity::Velocity, &config).unwrap())
         .collect();
     Run {
         traces: [[v[0].clone(), v[1].clone()], [v[2].clone(), v[3].clone()]],

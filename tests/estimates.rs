@@ -110,10 +110,7 @@ fn sem_trace(
         .unwrap()
         .traces
         .remove(0);
-    td.cut_back(
-        &td.remove_from_trace(&trace, Quantity::Velocity).unwrap(),
-        &cfg,
-    )
+    td.recorded(&trace, Quantity::Velocity, &cfg).unwrap()
 }
 
 /// (estimate, true relative L2 error of the order-`order` trace) from the companions at

@@ -626,12 +626,7 @@ fn run_strip_at(strip: &WaveStrip, dt: f64) -> Run {
         .unwrap()
         .traces
         .iter()
-        .map(|t| {
-            td.cut_back(
-                &td.remove_from_trace(t, Quantity::Velocity).unwrap(),
-                &config,
-            )
-        })
+        .map(|t| td.recorded(t, Quantity::Velocity, &config).unwrap())
         .collect();
     let seconds = clock.elapsed().as_secs_f64();
     let clock = Instant::now();

@@ -65,8 +65,7 @@ fn recorded(
     let out = strip
         .run(&[source], &[receiver], &td.extended(&config))
         .unwrap();
-    let trace = td.remove_from_trace(&out.traces[0], quantity).unwrap();
-    td.cut_back(&trace, &config)
+    td.recorded(&out.traces[0], quantity, &config).unwrap()
 }
 
 /// Central differences at 0.9 dt_crit and Newmark (lumped mass, average acceleration) at

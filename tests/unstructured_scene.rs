@@ -287,8 +287,7 @@ fn error_estimates_on_a_gmsh_mesh_hold_against_a_layered_reference() {
         .unwrap()
         .path
         .replace("gmsh_quad_plate.msh", "gmsh_quad_plate_unstructured.msh");
-    let top = spec.gmsh.as_ref().unwrap().order.unwrap();
-    assert_eq!(spec.refinement(), Refinement::Orders { top });
+    assert_eq!(spec.refinement(), Refinement::Orders { top: order });
     let main = Scene::build(&spec).unwrap();
     let dt = main.default_dt_s();
     let companions = spec.companions(dt).unwrap();

@@ -296,7 +296,7 @@ impl Scene {
         config: &RunConfig,
     ) -> Result<()> {
         for (trace, receiver) in out.traces.iter_mut().zip(&self.receivers) {
-            *trace = td.cut_back(&td.remove_from_trace(trace, receiver.quantity)?, config);
+            *trace = td.recorded(trace, receiver.quantity, config)?;
         }
         out.report.time_dispersion_removed_up_to_hz = Some(td.up_to_hz());
         Ok(())

@@ -172,6 +172,18 @@ impl TimeDispersion {
         signal::ROLL_OFF_PERIODS / self.up_to_hz
     }
 
+    /// A trace of the run of [`TimeDispersion::extended`]`(config)` as the run of `config`
+    /// records it without the step's error: [`TimeDispersion::remove_from_trace`], then
+    /// [`TimeDispersion::cut_back`].
+    pub fn recorded(
+        &self,
+        trace: &Signal,
+        quantity: Quantity,
+        config: &RunConfig,
+    ) -> Result<Signal> {
+        Ok(self.cut_back(&self.remove_from_trace(trace, quantity)?, config))
+    }
+
     /// The first samples of `trace` a run of `config` at this step records.
     pub fn cut_back(&self, trace: &Signal, config: &RunConfig) -> Signal {
         let n = super::step_count(config.duration_s, self.dt_s);
