@@ -136,9 +136,11 @@ pub enum Verdict {
     Refine,
     /// The quantity does not change between discretisations (to round-off).
     MeshIndependent,
-    /// A measure computed from waveforms (a misfit between two traces) whose own values do
-    /// not converge: `error` bounds it through the waveforms' stated errors
-    /// ([`Estimate::relative_misfit`]).
+    /// A measure computed from waveforms (a misfit between two traces, a peak ratio, a
+    /// side-lobe asymmetry, a spectral shift) whose own values do not converge: `error` bounds
+    /// it through the waveforms' stated errors ([`Estimate::relative_misfit`],
+    /// [`Estimate::peak_ratio`], [`Estimate::energy_asymmetry`],
+    /// [`Estimate::mean_frequency_shift`]).
     Propagated,
 }
 
@@ -476,7 +478,7 @@ impl Estimate {
                 format!("{:.4e}, error below {e:.2e} ({detail})", self.value)
             }
             (Verdict::Propagated, Some(e)) => format!(
-                "{:.4e}, error below {e:.2e} (bound from the errors of the traces it compares)",
+                "{:.4e}, error below {e:.2e} (bound from the errors of the traces it is computed from)",
                 self.value
             ),
             (Verdict::MeshIndependent, _) => {

@@ -77,7 +77,7 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         "sem_target.png",
         "sem_target_timing.csv",
         "sem_target_friction_lag.csv",
-        "sem_target_misfit.csv",
+        "sem_target_nonlinear.csv",
         "attenuation.csv",
         "attenuation.png",
         "quality.png",
@@ -120,7 +120,7 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
     tuned_trains_are_linear_without_the_crack(&out.join("plots/resonance.csv"));
     the_scan_locates_the_crack(&out.join("plots/scan_localisation.csv"));
     estimates_hold_against_the_reference(&out.join("plots/sem_target_estimate.csv"));
-    misfit_errors_hold_against_the_reference(&out.join("plots/sem_target_misfit.csv"));
+    nonlinear_errors_hold_against_the_reference(&out.join("plots/sem_target_nonlinear.csv"));
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -224,24 +224,27 @@ fn estimates_hold_against_the_reference(table: &std::path::Path) {
     }
 }
 
-/// The cracked delayed misfit's stated error on the smoke preset against the references of
-/// `sem_target.rhai` (piece `misfit`): never "refine"; an estimate within the factor 2
-/// of the misfit's distance to the reference that shares nothing with it (measured 0.79 and
-/// 1.43), a bound at least that distance less the references' distance to each other (the
-/// truth known no better).
-fn misfit_errors_hold_against_the_reference(table: &std::path::Path) {
+/// The nonlinear measures' stated errors on the smoke preset (the PI residual, the side-lobe
+/// asymmetry, the delayed misfit and the spectral shift at receiver 3) against the references
+/// of `sem_target.rhai` (piece `nonlinear`): never "refine"; an estimate within the issue's
+/// factor 2 of the measure's distance to the reference that shares nothing with it (measured
+/// 1.43 on the misfit, 1.63 on the shift), a bound at least that distance less the references'
+/// distance to each other, the truth known no better (the PI residual's and the asymmetry's,
+/// from their traces' errors, measured 4.4x and 5.3x the distance).
+fn nonlinear_errors_hold_against_the_reference(table: &std::path::Path) {
     let text = std::fs::read_to_string(table).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 2, "{text}");
+    assert_eq!(rows.len(), 4, "{text}");
     let number = |row: &[&str], name: &str| -> f64 { row[column(name)].parse().unwrap() };
     for row in &rows {
         let verdict = row[column("verdict")];
         assert!(
             ["reliable", "upper_bound", "propagated_bound"].contains(&verdict),
-            "misfit verdict {verdict}: {text}"
+            "{} verdict {verdict}: {text}",
+            row[column("measure")]
         );
         let (stated, truth) = (
             number(row, "stated_error"),

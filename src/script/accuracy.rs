@@ -144,7 +144,7 @@ mod accuracy_api {
         e.companions.iter().map(|&v| Dynamic::from(v)).collect()
     }
 
-    /// "reliable", "upper_bound" (converging faster than the scheme's order: `error` bounds it), "propagated_bound" (a misfit whose own values do not converge: `error` bounds it through the errors of the traces it compares), "refine" (not in the asymptotic range: no error claimed) or "mesh_independent".
+    /// "reliable", "upper_bound" (converging faster than the scheme's order: `error` bounds it), "propagated_bound" (a measure of traces, such as a misfit, PI residual, side-lobe asymmetry or spectral shift, whose own values do not converge: `error` bounds it through the errors of the traces it is computed from), "refine" (not in the asymptotic range: no error claimed) or "mesh_independent".
     #[rhai_fn(global, get = "verdict", pure)]
     pub fn verdict(e: &mut Estimate) -> String {
         match e.verdict {

@@ -288,21 +288,87 @@ pub(super) fn focus_estimates(
     );
     let responses: Vec<&Signal> = runs.iter().map(|t| &t.responses[r]).collect();
     let focused: Vec<&Signal> = f.iter().map(|x| &x.focused).collect();
-    let pi_residuals: Option<Vec<f64>> = f.iter().map(|x| x.pi_residual()).collect();
+    let focused_estimate = Estimate::waveform_of(&focused, focus_window, refinement)?;
     Ok(FocusEstimates {
         response: Estimate::waveform_of(&responses, (0.0, spec.record_s), refinement)?,
-        focused: Estimate::waveform_of(&focused, focus_window, refinement)?,
         peak_amplitude: scalar(&|x| x.peak.amplitude)?,
         peak_time_s: scalar(&|x| x.peak.time_s)?,
-        side_lobe_asymmetry: Estimate::dimensionless_of(
-            &values(&|x| x.side_lobes.asymmetry),
-            refinement,
-        )?,
+        side_lobe_asymmetry: side_lobe_asymmetry(f, &focused, spec, refinement)?,
         main_to_side_db: scalar(&|x| x.side_lobes.main_to_side_db)?,
-        pi_residual: pi_residuals
-            .map(|v| Estimate::dimensionless_of(&v, refinement))
-            .transpose()?,
+        pi_residual: pi_residual(f, &focused_estimate, focus_window, refinement)?,
+        focused: focused_estimate,
     })
+}
+
+/// The side-lobe asymmetry's estimate: its own, or where that says "refine" a bound from the
+/// focused signal's errors over the two side windows ([`Estimate::energy_asymmetry`]).
+fn side_lobe_asymmetry(
+    f: &[&Focus],
+    focused: &[&Signal],
+    spec: &TrNewsSpec,
+    refinement: Refinement,
+) -> Result<Estimate> {
+    let values: Vec<f64> = f.iter().map(|x| x.side_lobes.asymmetry).collect();
+    let own = Estimate::dimensionless_of(&values, refinement)?;
+    let lobes = &f[0].side_lobes;
+    let (main_from, main_to) = (
+        spec.window_s - spec.main_lobe_half_width_s,
+        spec.window_s + spec.main_lobe_half_width_s,
+    );
+    let before = (main_from - lobes.side_window_s, main_from);
+    let after = (main_to, main_to + lobes.side_window_s);
+    Ok(Estimate::energy_asymmetry(
+        own,
+        [lobes.energy_before, lobes.energy_after],
+        [
+            &Estimate::waveform_of(focused, before, refinement)?,
+            &Estimate::waveform_of(focused, after, refinement)?,
+        ],
+    ))
+}
+
+/// The PI residual's estimate, with pulse inversion: its own, or where that says "refine" a
+/// bound from the errors of the PI sum (its own, or through the focused and inverted signals
+/// it sums) and of the focused signal over the focus window ([`Estimate::peak_ratio`]).
+fn pi_residual(
+    f: &[&Focus],
+    focused: &Estimate,
+    window: (f64, f64),
+    refinement: Refinement,
+) -> Result<Option<Estimate>> {
+    let Some(residuals) = f
+        .iter()
+        .map(|x| x.pi_residual())
+        .collect::<Option<Vec<f64>>>()
+    else {
+        return Ok(None);
+    };
+    let own = Estimate::dimensionless_of(&residuals, refinement)?;
+    let traces = |q: fn(&Focus) -> Option<&Signal>| -> Option<Vec<&Signal>> {
+        f.iter().map(|x| q(x)).collect()
+    };
+    let (Some(sums), Some(inverted)) = (
+        traces(|x| x.pi_sum.as_ref()),
+        traces(|x| x.inverted.as_ref()),
+    ) else {
+        return Ok(Some(own));
+    };
+    let norm = |s: &Signal| -> Result<f64> { Ok(s.window(window.0, window.1)?.energy().sqrt()) };
+    let sum_norm = norm(sums[0])?;
+    if !(sum_norm > 0.0) {
+        return Ok(Some(own));
+    }
+    let sum_error = Estimate::sum_error(
+        &Estimate::waveform_of(&sums, window, refinement)?,
+        [
+            (focused, norm(&f[0].focused)? / sum_norm),
+            (
+                &Estimate::waveform_of(&inverted, window, refinement)?,
+                norm(inverted[0])? / sum_norm,
+            ),
+        ],
+    );
+    Ok(Some(Estimate::peak_ratio(own, sum_error, focused)))
 }
 
 /// `e` with the internal parameter names of the signal and run functions replaced by the

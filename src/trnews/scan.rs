@@ -44,7 +44,8 @@ impl Scan {
     /// The crack's spectral shift at each scanned position: the mean frequency
     /// ([`mean_frequency_hz`]) of the first-pass response less `baseline`'s (the uncracked
     /// scene's scan of the same receivers), with its estimate from the shifts on the
-    /// companions when both scans have them.
+    /// companions when both scans have them, or where those say "refine" a bound from the two
+    /// responses' errors ([`Estimate::mean_frequency_shift`]).
     pub fn spectral_shifts(&self, baseline: &Scan) -> Result<Vec<(f64, Option<Estimate>)>> {
         if self.receivers != baseline.receivers {
             return Err(Error::invalid(
@@ -68,14 +69,34 @@ impl Scan {
         self.receivers
             .iter()
             .map(|&k| {
-                let shifts = (0..runs)
-                    .map(|d| {
-                        Ok(mean_frequency_hz(&own[d].responses[k - 1])?
-                            - mean_frequency_hz(&base[d].responses[k - 1])?)
-                    })
-                    .collect::<Result<Vec<f64>>>()?;
+                let moments = |passes: &[TrNews]| -> Result<Vec<(f64, f64)>> {
+                    (0..runs)
+                        .map(|d| spectrum_moments_hz(&passes[d].responses[k - 1]))
+                        .collect()
+                };
+                let (cracked, uncracked) = (moments(&own)?, moments(&base)?);
+                let shifts: Vec<f64> = cracked
+                    .iter()
+                    .zip(&uncracked)
+                    .map(|(c, u)| c.0 - u.0)
+                    .collect();
                 let estimate = estimated
-                    .map(|r| Estimate::scalar_of(&shifts, r))
+                    .map(|r| -> Result<Estimate> {
+                        let own_estimate = Estimate::scalar_of(&shifts, r)?;
+                        let record = (0.0, self.first_pass.spec.record_s);
+                        let trace_error = |passes: &[TrNews]| {
+                            let traces: Vec<&Signal> =
+                                passes.iter().map(|p| &p.responses[k - 1]).collect();
+                            Estimate::waveform_of(&traces, record, r)
+                        };
+                        Ok(Estimate::mean_frequency_shift(
+                            own_estimate,
+                            [
+                                (cracked[0].1, &trace_error(&own)?),
+                                (uncracked[0].1, &trace_error(&base)?),
+                            ],
+                        ))
+                    })
                     .transpose()?;
                 Ok((shifts[0], estimate))
             })
@@ -299,6 +320,12 @@ fn scan_point(r: &Responder, pass: &TrNews, k: usize, drive: &ScanDrive) -> Resu
 /// quarter of the trace, half overlapping, no detrending), the measure of the crack's spectral
 /// shift (the report's "virtual transducer", Sec. 5.4).
 pub fn mean_frequency_hz(s: &Signal) -> Result<f64> {
+    Ok(spectrum_moments_hz(s)?.0)
+}
+
+/// The mean frequency of `s`'s Welch spectrum ([`mean_frequency_hz`]) and its spread, the
+/// standard deviation sqrt(sum (f - mean)^2 P(f) / sum P(f)).
+fn spectrum_moments_hz(s: &Signal) -> Result<(f64, f64)> {
     let p = signal::welch(s, (s.len() / 4).max(2), 0.5, Window::Hann, Detrend::None)?;
     let power: f64 = p.psd.iter().sum();
     if !(power > 0.0) {
@@ -308,12 +335,16 @@ pub fn mean_frequency_hz(s: &Signal) -> Result<f64> {
             "has no spectrum to take a mean frequency of",
         ));
     }
-    Ok(p.freqs_hz
-        .iter()
-        .zip(&p.psd)
-        .map(|(f, v)| f * v)
-        .sum::<f64>()
-        / power)
+    let moment = |g: &dyn Fn(f64) -> f64| -> f64 {
+        p.freqs_hz
+            .iter()
+            .zip(&p.psd)
+            .map(|(f, v)| g(*f) * v)
+            .sum::<f64>()
+            / power
+    };
+    let mean = moment(&|f| f);
+    Ok((mean, moment(&|f| (f - mean).powi(2)).sqrt()))
 }
 
 /// Where a scan's map puts the crack: the extent [from_m, to_m] of the map's peak at half its
@@ -434,6 +465,58 @@ fn scaled(values: &[f64], view: &str) -> Result<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A trace moved by a relative L2 error e moves its mean frequency by at most
+    /// 2 sigma e / (1 - e)^2 (`Estimate::mean_frequency_shift`), in every band-limited
+    /// direction tried (a delay, a scaling, a tone elsewhere in the band), and the worst
+    /// direction, whose spectrum is (f - mean) X(f) (the envelope's derivative on the
+    /// quadrature carrier), comes within a factor 2 of it.
+    #[test]
+    fn mean_frequency_moves_within_twice_the_spread_times_the_error() {
+        let (dt, n, f0, width) = (20e-9, 4096, 1e6, 4e-6);
+        let t = |k: usize| k as f64 * dt - 0.5 * n as f64 * dt;
+        let envelope = |t: f64| (-(t / width).powi(2) / 2.0).exp();
+        let tone = |f: f64, delay: f64| -> Vec<f64> {
+            (0..n)
+                .map(|k| {
+                    envelope(t(k) - delay) * (std::f64::consts::TAU * f * (t(k) - delay)).cos()
+                })
+                .collect()
+        };
+        let x = tone(f0, 0.0);
+        let worst: Vec<f64> = (0..n)
+            .map(|k| {
+                -t(k) / width.powi(2) * envelope(t(k)) * (std::f64::consts::TAU * f0 * t(k)).sin()
+            })
+            .collect();
+        let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
+        let signal = |v: Vec<f64>| Signal::new(dt, 0.0, v).unwrap();
+        let (mean, sigma) = spectrum_moments_hz(&signal(x.clone())).unwrap();
+        for e in [0.01, 0.05] {
+            let bound = 2.0 * sigma * e / (1.0 - e).powi(2);
+            let mut largest: f64 = 0.0;
+            for direction in [
+                worst.clone(),
+                tone(f0, 0.1e-6),
+                x.clone(),
+                tone(1.5e6, 0.0),
+                tone(0.6e6, 1e-6),
+            ] {
+                for sign in [1.0, -1.0] {
+                    let scale = sign * e * norm(&x) / norm(&direction);
+                    let moved: Vec<f64> = x
+                        .iter()
+                        .zip(&direction)
+                        .map(|(a, d)| a + scale * d)
+                        .collect();
+                    let shift = (spectrum_moments_hz(&signal(moved)).unwrap().0 - mean).abs();
+                    assert!(shift <= bound, "e {e}: {shift} > {bound}");
+                    largest = largest.max(shift);
+                }
+            }
+            assert!(largest >= 0.5 * bound, "e {e}: worst {largest} of {bound}");
+        }
+    }
 
     /// A crack of length L at c seen through a Gaussian spot of half width at half maximum w:
     /// the map (a rectangle smoothed by the spot) is located to within a tenth of the scan's
