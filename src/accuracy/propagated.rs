@@ -97,18 +97,19 @@ impl Estimate {
 
     /// The estimate of a side-lobe energy asymmetry A = (E_a - E_b) / (E_a + E_b) from its own
     /// values and, where they say "refine", from the relative L2 errors e_b, e_a of the trace
-    /// over the windows before and after the main lobe: E = ||x||^2 there lies within
+    /// over the windows before and after the main lobe (`None`: not stated, no bound): E =
+    /// ||x||^2 there lies within
     /// E_h (1 -+ e)^2, and A, rising with E_a and falling with E_b, is furthest from A_h at
     /// the corners (E_a (1 + e_a)^2, E_b (1 - e_b)^2) and (E_a (1 - e_a)^2, E_b (1 + e_b)^2).
     pub fn energy_asymmetry(
         own: Estimate,
         [energy_before, energy_after]: [f64; 2],
-        [before, after]: [&Estimate; 2],
+        [before, after]: [Option<f64>; 2],
     ) -> Estimate {
         if own.verdict != Verdict::Refine {
             return own;
         }
-        let (Some(e_b), Some(e_a)) = (before.stated(), after.stated()) else {
+        let (Some(e_b), Some(e_a)) = (before, after) else {
             return own;
         };
         let asymmetry = |a: f64, b: f64| if a + b > 0.0 { (a - b) / (a + b) } else { 0.0 };
@@ -359,7 +360,7 @@ mod tests {
         let stated = Estimate::energy_asymmetry(
             own,
             [energy(&before), energy(&after)],
-            [&waveform(e_b), &waveform(e_a)],
+            [Some(e_b), Some(e_a)],
         );
         assert_eq!(stated.verdict, Verdict::Propagated);
         let bound = stated.error.unwrap();

@@ -123,8 +123,9 @@ fn a_fast_fall_from_low_order_companions_keeps_the_bound() {
 
 #[test]
 fn a_fall_slower_than_the_slowest_or_unfit_says_refine() {
-    // 10% per order: too little of the fall to rest a tail on.
-    let [p, p1, p2] = slow_traces(4e-3, 0.9, 0.5);
+    // 10% per order, the errors aligned: too little of the fall to rest a tail on, too
+    // aligned to be a scatter.
+    let [p, p1, p2] = slow_traces(4e-3, 0.9, 0.8);
     let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), Refinement::Orders { top: 7 }).unwrap();
     assert_eq!(e.verdict, Verdict::Refine, "{e:?}");
     assert!(e.error.is_none() && e.correlation.is_none());
@@ -136,6 +137,32 @@ fn a_fall_slower_than_the_slowest_or_unfit_says_refine() {
     // A scalar whose differences change sign and grow: refine.
     let e = Estimate::scalar(1.003, 1.007, 1.004, Refinement::Orders { top: 7 });
     assert_eq!(e.verdict, Verdict::Refine, "{e:?}");
+}
+
+/// Errors along x of one size that correlate c between consecutive orders (no fall: the
+/// contact at GLL nodes, each order another perturbation): the scatter's estimate recovers
+/// their size exactly up to c = 1/2, and says "refine" above, where errors that do not fall
+/// are aligned.
+#[test]
+fn errors_that_do_not_fall_are_their_scatter_where_mostly_independent() {
+    let a: f64 = 4e-3;
+    let truth = a / (1.0 + a * a).sqrt();
+    for c in [-0.3, 0.0, 0.3, 0.45] {
+        let [p, p1, p2] = slow_traces(a, 1.0, c);
+        let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), Refinement::Orders { top: 7 });
+        let e = e.unwrap();
+        assert_eq!(e.verdict, Verdict::Reliable, "c {c}: {e:?}");
+        assert!(
+            (e.error.unwrap() / truth - 1.0).abs() < 1e-6,
+            "c {c}: {e:?}"
+        );
+        assert!((e.correlation.unwrap() - c).abs() < 1e-6, "c {c}: {e:?}");
+    }
+    for c in [0.6, 0.9] {
+        let [p, p1, p2] = slow_traces(a, 1.0, c);
+        let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), Refinement::Orders { top: 7 });
+        assert_eq!(e.unwrap().verdict, Verdict::Refine, "c {c}");
+    }
 }
 
 /// A scalar whose errors along x alternate in sign, E_p = a (-rho)^(p - 7): the bound d_1

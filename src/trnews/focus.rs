@@ -293,7 +293,7 @@ pub(super) fn focus_estimates(
         response: Estimate::waveform_of(&responses, (0.0, spec.record_s), refinement)?,
         peak_amplitude: scalar(&|x| x.peak.amplitude)?,
         peak_time_s: scalar(&|x| x.peak.time_s)?,
-        side_lobe_asymmetry: side_lobe_asymmetry(f, &focused, spec, refinement)?,
+        side_lobe_asymmetry: side_lobe_asymmetry(f, &focused, &focused_estimate, spec, refinement)?,
         main_to_side_db: scalar(&|x| x.side_lobes.main_to_side_db)?,
         pi_residual: pi_residual(f, &focused_estimate, focus_window, refinement)?,
         focused: focused_estimate,
@@ -301,10 +301,13 @@ pub(super) fn focus_estimates(
 }
 
 /// The side-lobe asymmetry's estimate: its own, or where that says "refine" a bound from the
-/// focused signal's errors over the two side windows ([`Estimate::energy_asymmetry`]).
+/// focused signal's errors over the two side windows ([`Estimate::energy_asymmetry`]): each
+/// window's own estimate, or, the smaller where both are stated, the focus window's error,
+/// which contains it: ||dy||_side <= e_f ||y||_focus.
 fn side_lobe_asymmetry(
     f: &[&Focus],
     focused: &[&Signal],
+    focused_estimate: &Estimate,
     spec: &TrNewsSpec,
     refinement: Refinement,
 ) -> Result<Estimate> {
@@ -315,14 +318,33 @@ fn side_lobe_asymmetry(
         spec.window_s - spec.main_lobe_half_width_s,
         spec.window_s + spec.main_lobe_half_width_s,
     );
-    let before = (main_from - lobes.side_window_s, main_from);
-    let after = (main_to, main_to + lobes.side_window_s);
+    let focus_energy = f[0]
+        .focused
+        .window(
+            spec.window_s - spec.after_focus_s,
+            spec.window_s + spec.after_focus_s,
+        )?
+        .energy();
+    let side_error = |window: (f64, f64), energy: f64| -> Result<Option<f64>> {
+        let own = Estimate::waveform_of(focused, window, refinement)?.stated();
+        let through_focus = focused_estimate
+            .stated()
+            .filter(|_| energy > 0.0)
+            .map(|e| e * (focus_energy / energy).sqrt());
+        Ok(match (own, through_focus) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        })
+    };
     Ok(Estimate::energy_asymmetry(
         own,
         [lobes.energy_before, lobes.energy_after],
         [
-            &Estimate::waveform_of(focused, before, refinement)?,
-            &Estimate::waveform_of(focused, after, refinement)?,
+            side_error(
+                (main_from - lobes.side_window_s, main_from),
+                lobes.energy_before,
+            )?,
+            side_error((main_to, main_to + lobes.side_window_s), lobes.energy_after)?,
         ],
     ))
 }
