@@ -53,6 +53,7 @@ use crate::signal::{self, Signal};
 use serde::{Deserialize, Serialize};
 
 mod propagated;
+pub(crate) use propagated::smaller;
 
 /// How the two companions of an estimate are made from the main discretisation, which fixes
 /// the order of convergence the estimate expects.

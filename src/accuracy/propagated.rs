@@ -89,17 +89,13 @@ impl Estimate {
             .iter()
             .map(|(e, size)| e.stated().map(|e| e * size))
             .sum::<Option<f64>>();
-        match (own.stated(), through_terms) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        smaller(own.stated(), through_terms)
     }
 
     /// The estimate of a side-lobe energy asymmetry A = (E_a - E_b) / (E_a + E_b) from its own
     /// values and, where they say "refine", from the relative L2 errors e_b, e_a of the trace
     /// over the windows before and after the main lobe (`None`: not stated, no bound): E =
-    /// ||x||^2 there lies within
-    /// E_h (1 -+ e)^2, and A, rising with E_a and falling with E_b, is furthest from A_h at
+    /// ||x||^2 there lies within E_h (1 -+ e)^2, and A, rising with E_a and falling with E_b, is furthest from A_h at
     /// the corners (E_a (1 + e_a)^2, E_b (1 - e_b)^2) and (E_a (1 - e_a)^2, E_b (1 + e_b)^2).
     pub fn energy_asymmetry(
         own: Estimate,
@@ -172,6 +168,14 @@ impl Estimate {
             Verdict::Refine => None,
             _ => self.error,
         }
+    }
+}
+
+/// The smaller of two routes to an error, either of which may state none.
+pub(crate) fn smaller(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
     }
 }
 

@@ -331,10 +331,7 @@ fn side_lobe_asymmetry(
             .stated()
             .filter(|_| energy > 0.0)
             .map(|e| e * (focus_energy / energy).sqrt());
-        Ok(match (own, through_focus) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        })
+        Ok(crate::accuracy::smaller(own, through_focus))
     };
     Ok(Estimate::energy_asymmetry(
         own,
