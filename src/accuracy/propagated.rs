@@ -95,8 +95,9 @@ impl Estimate {
     /// The estimate of a side-lobe energy asymmetry A = (E_a - E_b) / (E_a + E_b) from its own
     /// values and, where they say "refine", from the relative L2 errors e_b, e_a of the trace
     /// over the windows before and after the main lobe (`None`: not stated, no bound): E =
-    /// ||x||^2 there lies within E_h (1 -+ e)^2, and A, rising with E_a and falling with E_b, is furthest from A_h at
-    /// the corners (E_a (1 + e_a)^2, E_b (1 - e_b)^2) and (E_a (1 - e_a)^2, E_b (1 + e_b)^2).
+    /// ||x||^2 there lies within E_h (1 -+ e)^2, and A, rising with E_a and falling with E_b,
+    /// is furthest from A_h at the corners (E_a (1 + e_a)^2, E_b (1 - e_b)^2) and
+    /// (E_a (1 - e_a)^2, E_b (1 + e_b)^2).
     pub fn energy_asymmetry(
         own: Estimate,
         [energy_before, energy_after]: [f64; 2],
