@@ -40,9 +40,22 @@
 //! the estimate states their geometric mean sqrt(2) d_y ([`ACROSS_TAIL`]), within a factor
 //! sqrt(2) of either end. Measured: the companion across is 2.5-3.4x more accurate than the
 //! presets at normal incidence and 3-12x at oblique incidence (rho = 0.08-0.4), where d_y
-//! alone was 0.64-0.72 and 0.94-1.11 of the truth. The stated error combines the two
-//! sources (a waveform's in quadrature, a scalar's as a sum), and the estimate names the
-//! larger as the dominant source
+//! alone was 0.64-0.72 and 0.94-1.11 of the truth.
+//!
+//! Where a crack's faces touch, a fourth companion is the scene at half its step (the same
+//! elements, orders and rows). The time-dispersion transforms remove the step's error of
+//! linear motion, not the contact's: the moments the faces close and slip fall on the step's
+//! grid. Its difference d_t = |Q_dt - Q_dt/2| is the error in time e_t = d_t / (1 - 2^-q) for
+//! an error of order q in the step: 2 d_t at first order (an impact), 4/3 d_t at second
+//! (smooth motion); where the contact's chatter makes a value scatter with the step instead
+//! of converging (independent errors of one size at both steps), d_t / sqrt(2). The estimate
+//! states sqrt(2) d_t ([`STEP_TAIL`]), within a factor 2 of all three. Measured on the quick
+//! preset's cracked misfit: the companions along x and across agree to 4e-5, the half step
+//! moves it 3.4e-4, and the references that refine everything are 3.3e-4 apart
+//! (docs/src/validation/default-experiment.md).
+//!
+//! The stated error combines the sources (a waveform's in quadrature, a scalar's as a sum),
+//! and the estimate names the largest as the dominant source
 //! ([`Estimate::dominant_source`]). The companions along x keep the scene's orders across and
 //! its step, so that they see the error along x alone: with their own rows and steps they
 //! saw an error across of their own, 1.4-12x the true error at oblique incidence
@@ -154,6 +167,9 @@ pub enum Source {
     Refinement,
     /// The orders across the layers (spectral elements' third companion).
     Across,
+    /// The time step where a crack's faces touch (spectral elements' fourth companion, at
+    /// half the step, on scenes with contact).
+    Step,
 }
 
 impl Source {
@@ -162,6 +178,7 @@ impl Source {
         match self {
             Source::Refinement => "along x",
             Source::Across => "across the layers",
+            Source::Step => "in time",
         }
     }
 }
@@ -190,6 +207,11 @@ pub struct Estimate {
     /// across it gives, [`Estimate::across_error`].
     #[serde(default)]
     pub across: Option<f64>,
+    /// The difference d_t = |Q - Q_dt/2| (waveforms: relative L2) to the companion at half the
+    /// step, when the estimate has one (scenes with contact); `error` includes the error in
+    /// time it gives, [`Estimate::step_error`].
+    #[serde(default)]
+    pub step: Option<f64>,
     /// On spectral elements, where the estimate along x is the fitted tail ([`fitted_tail`]):
     /// the correlation c of consecutive orders' errors it took; 1 for a scalar (a slow fall
     /// only).
@@ -201,6 +223,11 @@ pub struct Estimate {
 /// across: sqrt(2), the geometric mean of the bounds 1 and 2 that hold when an order across
 /// at least halves the error (module doc).
 pub const ACROSS_TAIL: f64 = std::f64::consts::SQRT_2;
+
+/// The error in time per unit difference d_t to the companion at half the step: sqrt(2),
+/// within a factor 2 of the error at first order in the step (2 d_t), at second (4/3 d_t) and
+/// of a value that scatters with the step (d_t / sqrt(2); module doc).
+pub const STEP_TAIL: f64 = std::f64::consts::SQRT_2;
 
 impl Estimate {
     /// Estimate for a scalar from its values at h, 2h, 4h (scheme order `order`).
@@ -257,6 +284,7 @@ impl Estimate {
             observed_order,
             verdict,
             across: None,
+            step: None,
             correlation,
         }
     }
@@ -321,18 +349,20 @@ impl Estimate {
             observed_order,
             verdict,
             across: None,
+            step: None,
             correlation,
         })
     }
 
     /// Estimate of a dimensional scalar from its `values` on the main discretisation and on
     /// each companion in the order [`crate::scene::SceneSpec::companions`] gives them: the
-    /// refinement's two, then the one across the layers where there is one.
+    /// refinement's two, then the one across the layers where there is one, then the one at
+    /// half the step where there is one.
     pub fn scalar_of(values: &[f64], refinement: Refinement) -> Result<Estimate> {
         let [fine, medium, coarse] = first_three(values)?;
         let e = Self::scalar(fine, medium, coarse, refinement);
         let scale = values.iter().fold(0f64, |m, v| m.max(v.abs()));
-        Ok(across_of(values, e, scale, |a| (fine - a).abs()))
+        Ok(sources_of(values, e, scale, |a| (fine - a).abs()))
     }
 
     /// [`Estimate::dimensionless`] from the values on the main discretisation and on each
@@ -341,48 +371,57 @@ impl Estimate {
         let [fine, medium, coarse] = first_three(values)?;
         let e = Self::dimensionless(fine, medium, coarse, refinement);
         let scale = values.iter().fold(1f64, |m, v| m.max(v.abs()));
-        Ok(across_of(values, e, scale, |a| (fine - a).abs()))
+        Ok(sources_of(values, e, scale, |a| (fine - a).abs()))
     }
 
     /// [`Estimate::waveform`] from the traces on the main discretisation and on each
-    /// companion (see [`Estimate::scalar_of`]); the companion across is compared with the
-    /// main trace by the relative L2 difference over `window`.
+    /// companion (see [`Estimate::scalar_of`]); the companions across and at half the step
+    /// are compared with the main trace by the relative L2 difference over `window`.
     pub fn waveform_of(
         traces: &[&Signal],
         window: (f64, f64),
         refinement: Refinement,
     ) -> Result<Estimate> {
         let [fine, medium, coarse] = first_three(traces)?;
-        let e = Self::waveform(fine, medium, coarse, window, refinement)?;
-        match traces.get(3) {
-            None => Ok(e),
-            Some(across) => Ok(e.with_across(relative_difference(fine, across, window)?, 1.0)),
+        let mut e = Self::waveform(fine, medium, coarse, window, refinement)?;
+        for (source, other) in [Source::Across, Source::Step].into_iter().zip(&traces[3..]) {
+            e = e.with_source(source, relative_difference(fine, other, window)?, 1.0);
         }
+        Ok(e)
     }
 
-    /// This estimate with the error across the layers `d` added (see the module doc) to a
-    /// stated error ([`Estimate::combined`]); a bound along x stays one unless the error
-    /// across dominates it (then the sum is an estimate, "reliable"); as the whole error when
-    /// the refinement's companions agree (then "reliable" unless `d` too is round-off of
-    /// `scale`); a "refine" stays one.
-    fn with_across(mut self, d: f64, scale: f64) -> Estimate {
-        self.across = Some(d);
-        let e_y = ACROSS_TAIL * d;
+    /// This estimate with the error of `source` (across the layers or in time) from the
+    /// difference `d` to its companion added (see the module doc) to a stated error
+    /// ([`Estimate::combined`]); a bound along x stays one unless the added error dominates it
+    /// (then the sum is an estimate, "reliable"); as the whole error when the refinement's
+    /// companions agree (then "reliable" unless `d` too is round-off of `scale`); a "refine"
+    /// stays one.
+    fn with_source(mut self, source: Source, d: f64, scale: f64) -> Estimate {
+        let e_s = match source {
+            Source::Across => {
+                self.across = Some(d);
+                ACROSS_TAIL * d
+            }
+            Source::Step => {
+                self.step = Some(d);
+                STEP_TAIL * d
+            }
+            Source::Refinement => unreachable!("the refinement's companions are the first two"),
+        };
         match self.verdict {
             Verdict::MeshIndependent if d > ROUND_OFF * scale => {
-                (self.error, self.verdict) = (Some(e_y), Verdict::Reliable);
+                (self.error, self.verdict) = (Some(e_s), Verdict::Reliable);
             }
             Verdict::MeshIndependent | Verdict::Refine | Verdict::Propagated => {}
-            // A bound along x plus the estimate across, where the estimate across dominates,
-            // is an estimate: sqrt(2) d_y lies within sqrt(2) of the error across, either way
-            // (the smoke preset's cracked misfit, its error mostly across, was 1.3x its bound
-            // d_1 + sqrt(2) d_y).
-            Verdict::UpperBound if self.error.is_some_and(|e| e_y >= e) => {
-                self.error = self.error.map(|e| self.combined(e, e_y));
+            // A bound plus an estimate that dominates it is an estimate: sqrt(2) d lies within
+            // 2 of the error it estimates, either way (the smoke preset's cracked misfit, its
+            // error mostly across, was 1.3x its bound d_1 + sqrt(2) d_y).
+            Verdict::UpperBound if self.error.is_some_and(|e| e_s >= e) => {
+                self.error = self.error.map(|e| self.combined(e, e_s));
                 self.verdict = Verdict::Reliable;
             }
             Verdict::Reliable | Verdict::UpperBound => {
-                self.error = self.error.map(|e| self.combined(e, e_y));
+                self.error = self.error.map(|e| self.combined(e, e_s));
             }
         }
         self
@@ -392,6 +431,12 @@ impl Estimate {
     /// across ([`Estimate::across`]), when the estimate has that companion.
     pub fn across_error(&self) -> Option<f64> {
         self.across.map(|d| ACROSS_TAIL * d)
+    }
+
+    /// The error in time, [`STEP_TAIL`] times the difference to the companion at half the
+    /// step ([`Estimate::step`]), when the estimate has that companion.
+    pub fn step_error(&self) -> Option<f64> {
+        self.step.map(|d| STEP_TAIL * d)
     }
 
     /// The error of two sources e_x and e_y: a waveform's in quadrature, sqrt(e_x^2 + e_y^2)
@@ -406,58 +451,89 @@ impl Estimate {
         }
     }
 
+    /// The errors the companions beyond the refinement's two give (across the layers, in
+    /// time), those the estimate has.
+    fn added_sources(&self) -> impl Iterator<Item = (Source, f64)> {
+        [
+            (Source::Across, self.across_error()),
+            (Source::Step, self.step_error()),
+        ]
+        .into_iter()
+        .filter_map(|(source, e)| Some((source, e?)))
+    }
+
     /// The part of the stated error the refinement's companions see (the inverse of
-    /// [`Estimate::combined`] with the error across), when the estimate separates them.
+    /// [`Estimate::combined`] with the added sources' errors), when the estimate separates
+    /// them (it has a companion across or in time and states an error).
     fn refinement_part(&self) -> Option<f64> {
-        let (across, error) = (self.across_error()?, self.error?);
+        let error = self.error?;
+        let mut added = self.added_sources().map(|(_, e)| e).peekable();
+        added.peek()?;
         Some(if self.waveform {
-            (error * error - across * across).max(0.0).sqrt()
+            (error * error - added.map(|e| e * e).sum::<f64>())
+                .max(0.0)
+                .sqrt()
         } else {
-            (error - across).max(0.0)
+            (error - added.sum::<f64>()).max(0.0)
         })
     }
 
-    /// The larger of the error's sources, when the estimate separates them (it has a
-    /// companion across and states an error).
+    /// Each source's part of the stated error, along x first, when the estimate separates
+    /// them.
+    fn parts(&self) -> Option<Vec<(Source, f64)>> {
+        let along = self.refinement_part()?;
+        Some(
+            std::iter::once((Source::Refinement, along))
+                .chain(self.added_sources())
+                .collect(),
+        )
+    }
+
+    /// The largest of the error's sources, when the estimate separates them (it has a
+    /// companion across or in time and states an error); a tie goes to the later source.
     pub fn dominant_source(&self) -> Option<Source> {
-        let (across, along) = (self.across_error()?, self.refinement_part()?);
-        Some(if across >= along {
-            Source::Across
-        } else {
-            Source::Refinement
-        })
+        self.parts()?
+            .into_iter()
+            .reduce(|best, next| if next.1 >= best.1 { next } else { best })
+            .map(|(source, _)| source)
     }
 
-    /// "observed order 1.90", then, when the estimate has a companion across, each source's
-    /// part and the dominant one ("observed order 3.7; along x 2.8e-3, across the layers
-    /// 1.6e-3, along x dominant").
+    /// "observed order 1.90", then, when the estimate has a companion across or in time,
+    /// each source's part and the dominant one ("observed order 3.7; along x 2.8e-3, across
+    /// the layers 1.6e-3, in time 4.1e-4, along x dominant").
     fn detail(&self) -> String {
         let order = self
             .observed_order
             .map_or("-".to_string(), |q| format!("{q:.2}"));
-        let across = match (
-            self.across_error(),
-            self.refinement_part(),
-            self.dominant_source(),
-        ) {
-            (Some(a), Some(x), Some(source)) => format!(
-                "; {} {x:.2e}, {} {a:.2e}, {} dominant",
-                Source::Refinement.name(),
-                Source::Across.name(),
-                source.name()
-            ),
-            (Some(a), _, _) => format!("; {} {a:.2e}", Source::Across.name()),
-            _ => String::new(),
+        let list = |parts: &[(Source, f64)]| {
+            parts
+                .iter()
+                .map(|(source, e)| format!("{} {e:.2e}", source.name()))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let sources = match (self.parts(), self.dominant_source()) {
+            (Some(parts), Some(source)) => {
+                format!("; {}, {} dominant", list(&parts), source.name())
+            }
+            _ => {
+                let added: Vec<_> = self.added_sources().collect();
+                if added.is_empty() {
+                    String::new()
+                } else {
+                    format!("; {}", list(&added))
+                }
+            }
         };
         let fitted = self.correlation.map_or(String::new(), |c| {
             format!(", tail along x fitted: consecutive orders' errors correlate {c:.2}")
         });
-        format!("observed order {order}{fitted}{across}")
+        format!("observed order {order}{fitted}{sources}")
     }
 
     /// "1.2300e-2 +- 4.50e-4 (observed order 1.90)", "... (error unknown, ...: refine)";
-    /// for a waveform "relative L2 error 3.1e-2 (observed order 1.95)" or why unknown; with a
-    /// companion across, the share of the error across the layers and the dominant source.
+    /// for a waveform "relative L2 error 3.1e-2 (observed order 1.95)" or why unknown; with
+    /// companions across or in time, each source's share and the dominant one.
     pub fn describe(&self) -> String {
         let detail = self.detail();
         if self.waveform {
@@ -496,13 +572,14 @@ impl Estimate {
     }
 
     /// A short form for figure titles: "err 3.1%", "err < 3.1%", "err ? (2h: 30%)" for
-    /// waveforms (relative L2), "err 3.1% (mostly across)" when the error across the layers
-    /// dominates; "0.138 +- 4.5e-4", "0.138 (err ?, 2h: 1.3e-2)" for scalars.
+    /// waveforms (relative L2), "err 3.1% (mostly across)" or "(mostly in time)" when the
+    /// error across the layers or in time dominates; "0.138 +- 4.5e-4", "0.138 (err ?, 2h: 1.3e-2)" for scalars.
     pub fn brief(&self) -> String {
         if self.waveform {
             let pct = |x: f64| format!("{:.1}%", 100.0 * x);
             let mostly = match self.dominant_source() {
                 Some(Source::Across) => " (mostly across)",
+                Some(Source::Step) => " (mostly in time)",
                 _ => "",
             };
             return match (self.verdict, self.error) {
@@ -537,26 +614,34 @@ impl Estimate {
 }
 
 /// The first three of `values` (the main discretisation's and the refinement's two
-/// companions'), refusing fewer; a fourth is the companion across, and more is an error.
+/// companions'), refusing fewer; a fourth is the companion across, a fifth the one at half
+/// the step, and more is an error.
 fn first_three<T: Copy>(values: &[T]) -> Result<[T; 3]> {
     match values {
-        [a, b, c] | [a, b, c, _] => Ok([*a, *b, *c]),
+        [a, b, c] | [a, b, c, _] | [a, b, c, _, _] => Ok([*a, *b, *c]),
         _ => Err(crate::error::Error::invalid(
             "companions",
             values.len(),
             "an estimate takes the main discretisation's value and its companions': 3 values, \
-             or 4 with the companion across the layers",
+             4 with the companion across the layers, 5 with the one at half the step",
         )),
     }
 }
 
-/// `e` with the error across the layers from the fourth of `values`, if there is one
-/// (`difference` of the main value and it).
-fn across_of(values: &[f64], e: Estimate, scale: f64, difference: impl Fn(f64) -> f64) -> Estimate {
-    match values.get(3) {
-        Some(&across) => e.with_across(difference(across), scale),
-        None => e,
-    }
+/// `e` with the error across the layers from the fourth of `values` and the error in time
+/// from the fifth, those there are (`difference` of the main value and each).
+fn sources_of(
+    values: &[f64],
+    e: Estimate,
+    scale: f64,
+    difference: impl Fn(f64) -> f64,
+) -> Estimate {
+    [Source::Across, Source::Step]
+        .into_iter()
+        .zip(&values[3..])
+        .fold(e, |e, (source, &v)| {
+            e.with_source(source, difference(v), scale)
+        })
 }
 
 /// Relative L2 difference ||fine - other|| / ||fine|| over `window`, `other` resampled to

@@ -267,8 +267,9 @@ fn bad_sem_scenes_are_errors_naming_the_field() {
 /// The companions of a spectral-element scene's error estimate lower the order along x by
 /// one and two on the same elements, keeping every row's order across (the rule judged at
 /// the scene's order along x) and the scene's step; then they raise every row's order across
-/// by one, at its own step. They keep the laminate draw, and are refused below order 3 with
-/// an error naming the field. Triangles' companions coarsen the elements, at their own step.
+/// by one, at its own step; last, where the crack's faces touch, the scene at half the step.
+/// They keep the laminate draw, and are refused below order 3 with an error naming the field.
+/// Triangles' companions coarsen the elements, at their own step.
 #[test]
 fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
     use trnews::accuracy::Refinement;
@@ -291,19 +292,31 @@ fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
         })
         .collect();
     let steps: Vec<Option<f64>> = companions.iter().map(|c| c.time_step_s).collect();
-    assert_eq!(steps, [Some(dt), Some(dt), None]);
+    assert_eq!(steps, [Some(dt), Some(dt), None, Some(dt / 2.0)]);
+    assert!(
+        spec.contact().is_some(),
+        "the quick preset's crack has contact"
+    );
+    let tied = spec.uncracked().companions(dt).unwrap();
+    let steps: Vec<Option<f64>> = tied.iter().map(|c| c.time_step_s).collect();
+    assert_eq!(
+        steps,
+        [Some(dt), Some(dt), None],
+        "no contact, no companion in time"
+    );
     let floor = SemPreset::of(Resolution::Quick).min_order_y;
-    let expected: Vec<DiscretisationSpec> = [(6, 0, Some(7)), (5, 0, Some(7)), (7, 1, None)]
-        .map(
-            |(order_x, extra_order_y, rule_order_x)| DiscretisationSpec::Sem {
-                order_x,
-                min_order_y: floor,
-                max_order_y: 4,
-                extra_order_y,
-                rule_order_x,
-            },
-        )
-        .into();
+    let expected: Vec<DiscretisationSpec> =
+        [(6, 0, Some(7)), (5, 0, Some(7)), (7, 1, None), (7, 0, None)]
+            .map(
+                |(order_x, extra_order_y, rule_order_x)| DiscretisationSpec::Sem {
+                    order_x,
+                    min_order_y: floor,
+                    max_order_y: 4,
+                    extra_order_y,
+                    rule_order_x,
+                },
+            )
+            .into();
     assert_eq!(orders, expected);
 
     let LaminateSpec::Stochastic(draw) = &spec.laminate else {
@@ -321,6 +334,7 @@ fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
     assert_eq!(row_orders(&companions[1]), main, "order 5 along x");
     let raised: Vec<usize> = main.iter().map(|p| p + 1).collect();
     assert_eq!(row_orders(&companions[2]), raised, "one more across");
+    assert_eq!(row_orders(&companions[3]), main, "half the step");
 
     let low = SceneSpec {
         discretisation: sem(4),
@@ -428,7 +442,7 @@ fn newmark_and_central_differences_agree_at_second_order_on_a_sem_scene() {
     assert!(e.contains("integrator") && e.contains("contact"), "{e}");
 }
 
-/// The estimate's policy: off gives no companions, on gives both, "auto" gives them where they
+/// The estimate's policy: off gives no companions, on gives them all, "auto" gives them where they
 /// cost at most `AUTO_ESTIMATE_MAX_COST` of the main runs and otherwise states their cost:
 /// the spectral elements' companions (orders p - 1 and p - 2 on the same elements) cost about
 /// as much as the main run, the smoke T3 mesh's (2h, 4h) a fraction of it. Building them runs
@@ -450,7 +464,8 @@ fn auto_turns_the_estimate_on_where_the_companions_are_cheap() {
         EstimateDecision::Off
     ));
     match sem.estimate_decision(ErrorEstimate::On).unwrap() {
-        EstimateDecision::On(scenes) => assert_eq!(scenes.len(), 3),
+        // along x twice, across, and at half the step: the smoke preset's crack has contact
+        EstimateDecision::On(scenes) => assert_eq!(scenes.len(), 4),
         other => panic!("{other:?}"),
     }
     let sem_cost = sem.companion_scenes().unwrap().1;

@@ -157,6 +157,7 @@ impl Estimate {
             verdict: Verdict::Propagated,
             // its own differences say nothing of this error: no split by source
             across: None,
+            step: None,
             correlation: None,
             ..self
         }

@@ -273,7 +273,7 @@ fn the_error_across_adds_to_the_error_along_x_and_names_the_dominant_source() {
     let three = Estimate::scalar_of(&values[..3], Refinement::Orders { top: 7 }).unwrap();
     assert_eq!((three.across, three.dominant_source()), (None, None));
     assert!(Estimate::scalar_of(&values[..2], Refinement::Orders { top: 7 }).is_err());
-    assert!(Estimate::scalar_of(&[1.0; 5], Refinement::Orders { top: 7 }).is_err());
+    assert!(Estimate::scalar_of(&[1.0; 6], Refinement::Orders { top: 7 }).is_err());
     // A bound along x (a fall of 8x per order: d_1 = 1.4e-3) stays a bound with a smaller
     // error across, and becomes an estimate where the error across dominates it.
     let fast = |p: i32| 1.0 + 0.1 * 8f64.powi(-(p - 4));
@@ -356,4 +356,42 @@ fn a_waveforms_error_across_is_its_relative_l2_difference() {
         .unwrap()
         .hypot(ACROSS_TAIL * both.across.unwrap());
     assert!((both.error.unwrap() - expected).abs() < 1e-15, "{both:?}");
+}
+
+#[test]
+fn the_error_in_time_adds_to_the_others_and_can_dominate() {
+    // A cracked misfit whose companions along x and across agree to 4e-5, while half the
+    // step moves it 3.4e-4 (the quick preset's, docs/src/validation/default-experiment.md).
+    let m = 0.1193;
+    let values = [m, m + 1e-5, m + 3e-5, m + 1e-5, m + 3.4e-4];
+    let e = Estimate::dimensionless_of(&values, Refinement::Orders { top: 7 }).unwrap();
+    let step = e.step.unwrap();
+    assert!((step - 3.4e-4).abs() < 1e-15, "{e:?}");
+    assert!((e.step_error().unwrap() - STEP_TAIL * 3.4e-4).abs() < 1e-15);
+    assert_eq!(e.dominant_source(), Some(Source::Step));
+    assert_eq!(e.verdict, Verdict::Reliable, "{e:?}");
+    let along = e.error.unwrap() - STEP_TAIL * 3.4e-4 - ACROSS_TAIL * 1e-5;
+    assert!(along > 0.0 && along <= 1e-5, "{e:?}");
+    let text = e.describe();
+    assert!(text.contains("in time 4.81e-4, in time dominant"), "{text}");
+    // Without the companion at half the step the error in time is not there.
+    let four = Estimate::dimensionless_of(&values[..4], Refinement::Orders { top: 7 }).unwrap();
+    assert!(four.error.unwrap() < 1e-4, "{four:?}");
+    assert_eq!((four.step, four.step_error()), (None, None));
+    // A waveform's error in time adds in quadrature.
+    let dt = 1e-9;
+    let wave = |a: f64| {
+        let samples = (0..100).map(|k| a * (k as f64 * 0.1).sin()).collect();
+        Signal::new(dt, 0.0, samples).unwrap()
+    };
+    let (f, across, halved) = (wave(1.0), wave(1.003), wave(1.01));
+    let w = Estimate::waveform_of(
+        &[&f, &f, &f, &across, &halved],
+        (0.0, 1e-7),
+        Refinement::Orders { top: 7 },
+    )
+    .unwrap();
+    let expected = (ACROSS_TAIL * 0.003).hypot(STEP_TAIL * 0.01);
+    assert!((w.error.unwrap() - expected).abs() < 1e-12, "{w:?}");
+    assert_eq!(w.brief(), "err 1.5% (mostly in time)");
 }

@@ -1,7 +1,8 @@
 //! Rhai module `accuracy`: discretisation error estimates (type `Estimate`), the ones the
 //! TR-NEWS procedures attach with `error_estimate: true` and estimates of a script's own
 //! quantities from runs on a scene and its companions (h, 2h, 4h on triangles; orders p,
-//! p - 1, p - 2 along x and one more across on spectral elements; see [`crate::accuracy`]).
+//! p - 1, p - 2 along x, one more across and, with contact, half the step on spectral elements;
+//! see [`crate::accuracy`]).
 //! The overloads without a scene take three values at h, 2h, 4h on triangles.
 
 use crate::accuracy::Estimate;
@@ -33,7 +34,7 @@ mod accuracy_api {
         Estimate::scalar(fine, medium, coarse, Refinement::ElementSizes)
     }
 
-    /// Estimate of a dimensional scalar from its `values` on `scene` and on each of `scene.companions()`, in that order (2h and 4h on triangles; orders p - 1 and p - 2 along x, then one more across, on spectral elements).
+    /// Estimate of a dimensional scalar from its `values` on `scene` and on each of `scene.companions()`, in that order (2h and 4h on triangles; orders p - 1 and p - 2 along x, then one more across, then half the step where a crack's faces touch, on spectral elements).
     #[rhai_fn(name = "scalar", return_raw)]
     pub fn scalar_of(ctx: NativeCallContext, values: Array, scene: SceneRef) -> Res<Estimate> {
         let values = floats(&ctx, &values.into(), "values")?;
@@ -113,7 +114,19 @@ mod accuracy_api {
         e.across_error().map_or(Dynamic::UNIT, Dynamic::from)
     }
 
-    /// The larger source of the error, "along x" or "across the layers", when the estimate has a companion across and states an error; () otherwise.
+    /// The difference |Q - Q_dt/2| (waveforms: relative L2) to the companion at half the step (scenes with contact); () without that companion.
+    #[rhai_fn(global, get = "step", pure)]
+    pub fn step(e: &mut Estimate) -> Dynamic {
+        e.step.map_or(Dynamic::UNIT, Dynamic::from)
+    }
+
+    /// The error in time, sqrt(2) times `step` (within a factor 2 of the error at first or second order in the step, and of a value that scatters with it), included in `error`; () without the companion at half the step.
+    #[rhai_fn(global, get = "step_error", pure)]
+    pub fn step_error(e: &mut Estimate) -> Dynamic {
+        e.step_error().map_or(Dynamic::UNIT, Dynamic::from)
+    }
+
+    /// The largest source of the error, "along x", "across the layers" or "in time", when the estimate has a companion across or at half the step and states an error; () otherwise.
     #[rhai_fn(global, get = "dominant_source", pure)]
     pub fn dominant_source(e: &mut Estimate) -> Dynamic {
         e.dominant_source()

@@ -61,8 +61,10 @@ impl Scan {
                 .collect()
         };
         let (own, base) = (passes(self), passes(baseline));
+        // A linear baseline has no companion at half the step (its step's error is the
+        // time-dispersion transforms' to remove): its main run stands for it.
         let estimated = match (self.refinement, baseline.refinement) {
-            (Some(r), Some(_)) if own.len() == base.len() => Some(r),
+            (Some(r), Some(_)) if own.len() == base.len() || own.len() == base.len() + 1 => Some(r),
             _ => None,
         };
         let runs = if estimated.is_some() { own.len() } else { 1 };
@@ -71,7 +73,11 @@ impl Scan {
             .map(|&k| {
                 let moments = |passes: &[TrNews]| -> Result<Vec<(f64, f64)>> {
                     (0..runs)
-                        .map(|d| spectrum_moments_hz(&passes[d].responses[k - 1]))
+                        .map(|d| {
+                            spectrum_moments_hz(
+                                &passes.get(d).unwrap_or(&passes[0]).responses[k - 1],
+                            )
+                        })
                         .collect()
                 };
                 let (cracked, uncracked) = (moments(&own)?, moments(&base)?);
