@@ -5,7 +5,7 @@
 //! The delayed TR-NEWS misfit m = ||s - p|| / ||p|| (simulation s, linear prediction p, over
 //! the focus window) of a cracked scene is the norm of a small residual r = s - p, the
 //! contact's nonlinearity. Its own values at orders p, p-1, p-2 along x usually converge, and
-//! its own estimate (along x and across the layers) is stated: 1.43 of its distance to the
+//! its own estimate (along x, across the layers, in time) is stated: 1.49 of its distance to the
 //! references on the smoke preset (`scripts/sem_target.rhai`, piece `nonlinear`). But the
 //! contact acts at GLL nodes whose places change with the order, and the residual is a few
 //! percent of the traces, so the three misfits may scatter (differences that grow: "refine").
