@@ -94,7 +94,17 @@ pub enum Refinement {
         /// The main run's order p (along x on the layered rectangle, in both directions on a
         /// Gmsh mesh); the companions are at p - 1 and p - 2.
         top: usize,
+        /// Whether a companion across the layers follows them (the layered rectangle's; a
+        /// Gmsh mesh has no direction across).
+        #[serde(default = "layered")]
+        across: bool,
     },
+}
+
+/// An estimate stored before [`Refinement::Orders::across`] was recorded: the layered
+/// rectangle's.
+fn layered() -> bool {
+    true
 }
 
 impl Refinement {
@@ -103,6 +113,17 @@ impl Refinement {
         match self {
             Refinement::ElementSizes => 2.0,
             Refinement::Orders { .. } => 1.0,
+        }
+    }
+
+    /// The sources of the companions that may follow the refinement's two, in order: across
+    /// the layers (the layered rectangle's), then in time (at half the step, where a crack's
+    /// faces touch; [`crate::scene::SceneSpec::companions`]).
+    fn added_sources(self) -> &'static [Source] {
+        match self {
+            Refinement::Orders { across: true, .. } => &[Source::Across, Source::Step],
+            Refinement::Orders { across: false, .. } => &[Source::Step],
+            Refinement::ElementSizes => &[],
         }
     }
 
@@ -125,7 +146,7 @@ impl Refinement {
     fn top_fall(self, rho: f64) -> f64 {
         match self {
             Refinement::ElementSizes => rho,
-            Refinement::Orders { top } => {
+            Refinement::Orders { top, .. } => {
                 let p = top.max(3) as f64;
                 rho * (p - 1.0) / p
             }
@@ -327,7 +348,7 @@ impl Estimate {
         let mut correlation = None;
         let fitted = match refinement {
             Refinement::ElementSizes => false,
-            Refinement::Orders { top } => match verdict {
+            Refinement::Orders { top, .. } => match verdict {
                 Verdict::MeshIndependent | Verdict::Propagated => false,
                 Verdict::UpperBound => top >= FAST_FALL_FROM_ORDER + 2,
                 Verdict::Reliable | Verdict::Refine => true,
@@ -359,7 +380,7 @@ impl Estimate {
     /// refinement's two, then the one across the layers where there is one, then the one at
     /// half the step where there is one.
     pub fn scalar_of(values: &[f64], refinement: Refinement) -> Result<Estimate> {
-        let [fine, medium, coarse] = first_three(values)?;
+        let [fine, medium, coarse] = first_three(values, refinement)?;
         let e = Self::scalar(fine, medium, coarse, refinement);
         let scale = values.iter().fold(0f64, |m, v| m.max(v.abs()));
         Ok(sources_of(values, e, scale, |a| (fine - a).abs()))
@@ -368,7 +389,7 @@ impl Estimate {
     /// [`Estimate::dimensionless`] from the values on the main discretisation and on each
     /// companion (see [`Estimate::scalar_of`]).
     pub fn dimensionless_of(values: &[f64], refinement: Refinement) -> Result<Estimate> {
-        let [fine, medium, coarse] = first_three(values)?;
+        let [fine, medium, coarse] = first_three(values, refinement)?;
         let e = Self::dimensionless(fine, medium, coarse, refinement);
         let scale = values.iter().fold(1f64, |m, v| m.max(v.abs()));
         Ok(sources_of(values, e, scale, |a| (fine - a).abs()))
@@ -382,9 +403,9 @@ impl Estimate {
         window: (f64, f64),
         refinement: Refinement,
     ) -> Result<Estimate> {
-        let [fine, medium, coarse] = first_three(traces)?;
+        let [fine, medium, coarse] = first_three(traces, refinement)?;
         let mut e = Self::waveform(fine, medium, coarse, window, refinement)?;
-        for (source, other) in [Source::Across, Source::Step].into_iter().zip(&traces[3..]) {
+        for (&source, other) in refinement.added_sources().iter().zip(&traces[3..]) {
             e = e.with_source(source, relative_difference(fine, other, window)?, 1.0);
         }
         Ok(e)
@@ -614,32 +635,41 @@ impl Estimate {
 }
 
 /// The first three of `values` (the main discretisation's and the refinement's two
-/// companions'), refusing fewer; a fourth is the companion across, a fifth the one at half
-/// the step, and more is an error.
-fn first_three<T: Copy>(values: &[T]) -> Result<[T; 3]> {
+/// companions'), refusing fewer; those after them are the companions across and at half the
+/// step that `refinement` may have ([`Refinement::added_sources`]), and more is an error.
+fn first_three<T: Copy>(values: &[T], refinement: Refinement) -> Result<[T; 3]> {
+    let most = 3 + refinement.added_sources().len();
     match values {
-        [a, b, c] | [a, b, c, _] | [a, b, c, _, _] => Ok([*a, *b, *c]),
+        [a, b, c, ..] if values.len() <= most => Ok([*a, *b, *c]),
         _ => Err(crate::error::Error::invalid(
             "companions",
             values.len(),
-            "an estimate takes the main discretisation's value and its companions': 3 values, \
-             4 with the companion across the layers, 5 with the one at half the step",
+            format!(
+                "an estimate takes the main discretisation's value and its companions': 3 \
+                 values, up to {most} with the companions {}",
+                match refinement.added_sources() {
+                    [] => "2h and 4h only",
+                    [_] => "of lower order and the one at half the step",
+                    _ => "along x, the one across the layers and the one at half the step",
+                }
+            ),
         )),
     }
 }
 
-/// `e` with the error across the layers from the fourth of `values` and the error in time
-/// from the fifth, those there are (`difference` of the main value and each).
+/// `e` with the errors of the companions beyond the refinement's two, those there are
+/// ([`Refinement::added_sources`]; `difference` of the main value and each).
 fn sources_of(
     values: &[f64],
     e: Estimate,
     scale: f64,
     difference: impl Fn(f64) -> f64,
 ) -> Estimate {
-    [Source::Across, Source::Step]
-        .into_iter()
+    e.refinement
+        .added_sources()
+        .iter()
         .zip(&values[3..])
-        .fold(e, |e, (source, &v)| {
+        .fold(e, |e, (&source, &v)| {
             e.with_source(source, difference(v), scale)
         })
 }

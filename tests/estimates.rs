@@ -128,7 +128,14 @@ fn sem_estimate_and_truth(
     let step = 0.9 * WaveStrip::new(how, layers, false, BottomEdge::Absorbing).dt_crit();
     let traces =
         [order, order - 1, order - 2].map(|p| sem_trace(layers, p, size, depth, duration, step));
-    judge(traces, Refinement::Orders { top: order }, exact)
+    judge(
+        traces,
+        Refinement::Orders {
+            top: order,
+            across: true,
+        },
+        exact,
+    )
 }
 
 /// The homogeneous epoxy strip (4 mm), the receiver depth (2 mm) and a duration that ends

@@ -276,7 +276,13 @@ fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
     use trnews::scene::{DiscretisationKind, LaminateSpec, Resolution, SemPreset};
     use trnews::sem::SemModel;
     let spec = SceneSpec::preset(Resolution::Quick);
-    assert_eq!(spec.refinement(), Refinement::Orders { top: 7 });
+    assert_eq!(
+        spec.refinement(),
+        Refinement::Orders {
+            top: 7,
+            across: true
+        }
+    );
     let dt = 3.1e-9;
     let companions = spec.companions(dt).unwrap();
     let orders: Vec<DiscretisationSpec> = companions

@@ -287,7 +287,13 @@ fn error_estimates_on_a_gmsh_mesh_hold_against_a_layered_reference() {
         .unwrap()
         .path
         .replace("gmsh_quad_plate.msh", "gmsh_quad_plate_unstructured.msh");
-    assert_eq!(spec.refinement(), Refinement::Orders { top: order });
+    assert_eq!(
+        spec.refinement(),
+        Refinement::Orders {
+            top: order,
+            across: false
+        }
+    );
     let main = Scene::build(&spec).unwrap();
     let dt = main.default_dt_s();
     let companions = spec.companions(dt).unwrap();

@@ -62,8 +62,17 @@ fn a_waveforms_tail_along_x_is_fitted_at_any_fall() {
     ] {
         let a = 4e-3;
         let [p, p1, p2] = slow_traces(a, rho, c);
-        let e =
-            Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), Refinement::Orders { top: 7 }).unwrap();
+        let e = Estimate::waveform(
+            &p,
+            &p1,
+            &p2,
+            (0.0, 1.0),
+            Refinement::Orders {
+                top: 7,
+                across: true,
+            },
+        )
+        .unwrap();
         // the error at a constant fall, and what the top fall 6/7 rho makes of it
         let truth = a / (1.0 + a * a).sqrt();
         let spread = |r: f64| (1.0 + 1.0 / (r * r) - 2.0 * c / r).sqrt();
@@ -84,7 +93,15 @@ fn a_waveforms_tail_along_x_is_fitted_at_any_fall() {
         );
     }
     let q = |p: i32| 1.0 + 0.01 * 0.75f64.powi(p);
-    let e = Estimate::scalar(q(7), q(6), q(5), Refinement::Orders { top: 7 });
+    let e = Estimate::scalar(
+        q(7),
+        q(6),
+        q(5),
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    );
     assert_eq!(e.verdict, Verdict::Reliable);
     // the geometric tail at the top fall 6/7 of 0.75
     let top = 0.75 * 6.0 / 7.0;
@@ -94,7 +111,15 @@ fn a_waveforms_tail_along_x_is_fitted_at_any_fall() {
     // Stored with the sweep's points (postcard: every field written, with or without a fit).
     for stored in [
         e,
-        Estimate::scalar(1.0, 1.0, 1.0, Refinement::Orders { top: 7 }),
+        Estimate::scalar(
+            1.0,
+            1.0,
+            1.0,
+            Refinement::Orders {
+                top: 7,
+                across: true,
+            },
+        ),
     ] {
         let back: Estimate = crate::sweep::decode(&crate::sweep::encode(&stored).unwrap()).unwrap();
         assert_eq!(back, stored);
@@ -107,14 +132,32 @@ fn a_fast_fall_from_low_order_companions_keeps_the_bound() {
     // 7), the fitted tail.
     let [p, p1, p2] = slow_traces(4e-3, 0.2, 0.3);
     let window = (0.0, 1.0);
-    let low = Estimate::waveform(&p, &p1, &p2, window, Refinement::Orders { top: 4 });
+    let low = Estimate::waveform(
+        &p,
+        &p1,
+        &p2,
+        window,
+        Refinement::Orders {
+            top: 4,
+            across: true,
+        },
+    );
     let low = low.unwrap();
     assert_eq!(low.verdict, Verdict::UpperBound, "{low:?}");
     assert_eq!(
         (low.error, low.correlation),
         (Some(low.companions[0]), None)
     );
-    let high = Estimate::waveform(&p, &p1, &p2, window, Refinement::Orders { top: 7 });
+    let high = Estimate::waveform(
+        &p,
+        &p1,
+        &p2,
+        window,
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    );
     let high = high.unwrap();
     assert_eq!(high.verdict, Verdict::Reliable, "{high:?}");
     assert!(high.error.unwrap() < 0.3 * high.companions[0], "{high:?}");
@@ -126,16 +169,43 @@ fn a_fall_slower_than_the_slowest_or_unfit_says_refine() {
     // 10% per order, the errors aligned: too little of the fall to rest a tail on, too
     // aligned to be a scatter.
     let [p, p1, p2] = slow_traces(4e-3, 0.9, 0.8);
-    let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), Refinement::Orders { top: 7 }).unwrap();
+    let e = Estimate::waveform(
+        &p,
+        &p1,
+        &p2,
+        (0.0, 1.0),
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    )
+    .unwrap();
     assert_eq!(e.verdict, Verdict::Refine, "{e:?}");
     assert!(e.error.is_none() && e.correlation.is_none());
     // Triangles keep their order-2 test: a slow fall of element sizes is not fitted.
     let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), Refinement::ElementSizes).unwrap();
     assert_eq!(e.verdict, Verdict::Refine, "{e:?}");
     // No correlation fits differences with d_13 > d_1 + d_2 (not a triangle).
-    assert!(fitted_tail(1.0, 1.3, Some(2.5), Refinement::Orders { top: 7 }).is_none());
+    assert!(fitted_tail(
+        1.0,
+        1.3,
+        Some(2.5),
+        Refinement::Orders {
+            top: 7,
+            across: true
+        }
+    )
+    .is_none());
     // A scalar whose differences change sign and grow: refine.
-    let e = Estimate::scalar(1.003, 1.007, 1.004, Refinement::Orders { top: 7 });
+    let e = Estimate::scalar(
+        1.003,
+        1.007,
+        1.004,
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    );
     assert_eq!(e.verdict, Verdict::Refine, "{e:?}");
 }
 
@@ -149,7 +219,16 @@ fn errors_that_do_not_fall_are_their_scatter_where_mostly_independent() {
     let truth = a / (1.0 + a * a).sqrt();
     for c in [-0.3, 0.0, 0.3, 0.45] {
         let [p, p1, p2] = slow_traces(a, 1.0, c);
-        let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), Refinement::Orders { top: 7 });
+        let e = Estimate::waveform(
+            &p,
+            &p1,
+            &p2,
+            (0.0, 1.0),
+            Refinement::Orders {
+                top: 7,
+                across: true,
+            },
+        );
         let e = e.unwrap();
         assert_eq!(e.verdict, Verdict::Reliable, "c {c}: {e:?}");
         assert!(
@@ -160,7 +239,16 @@ fn errors_that_do_not_fall_are_their_scatter_where_mostly_independent() {
     }
     for c in [0.6, 0.9] {
         let [p, p1, p2] = slow_traces(a, 1.0, c);
-        let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), Refinement::Orders { top: 7 });
+        let e = Estimate::waveform(
+            &p,
+            &p1,
+            &p2,
+            (0.0, 1.0),
+            Refinement::Orders {
+                top: 7,
+                across: true,
+            },
+        );
         assert_eq!(e.unwrap().verdict, Verdict::Refine, "c {c}");
     }
 }
@@ -173,7 +261,15 @@ fn a_scalars_alternating_errors_along_x_are_bounded_by_d1() {
     let a = 2e-3;
     for rho in [0.8, 0.5, 0.1] {
         let q = |p: i32| 0.05 + a * (-1.0f64 / rho).powi(7 - p);
-        let e = Estimate::scalar(q(7), q(6), q(5), Refinement::Orders { top: 7 });
+        let e = Estimate::scalar(
+            q(7),
+            q(6),
+            q(5),
+            Refinement::Orders {
+                top: 7,
+                across: true,
+            },
+        );
         assert_eq!(e.verdict, Verdict::UpperBound, "rho {rho}: {e:?}");
         let bound = e.error.unwrap();
         assert!(
@@ -186,7 +282,15 @@ fn a_scalars_alternating_errors_along_x_are_bounded_by_d1() {
     }
     for rho in [0.9, 1.2] {
         let q = |p: i32| 0.05 + a * (-1.0f64 / rho).powi(7 - p);
-        let e = Estimate::scalar(q(7), q(6), q(5), Refinement::Orders { top: 7 });
+        let e = Estimate::scalar(
+            q(7),
+            q(6),
+            q(5),
+            Refinement::Orders {
+                top: 7,
+                across: true,
+            },
+        );
         assert_eq!(e.verdict, Verdict::Refine, "rho {rho}: {e:?}");
     }
 }
@@ -255,7 +359,14 @@ fn the_error_across_adds_to_the_error_along_x_and_names_the_dominant_source() {
     let along = 0.3 * 2f64.powi(-7);
     let across = 3.0 * along;
     let values = [q(7), q(6), q(5), q(7) + across];
-    let e = Estimate::scalar_of(&values, Refinement::Orders { top: 7 }).unwrap();
+    let e = Estimate::scalar_of(
+        &values,
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    )
+    .unwrap();
     assert_eq!(e.verdict, Verdict::Reliable);
     let expected = along + ACROSS_TAIL * across;
     assert!((e.error.unwrap() - expected).abs() < 1e-12, "{e:?}");
@@ -265,15 +376,39 @@ fn the_error_across_adds_to_the_error_along_x_and_names_the_dominant_source() {
     assert!(text.contains("across the layers dominant"), "{text}");
     let small = Estimate::scalar_of(
         &[q(7), q(6), q(5), q(7) + 0.1 * along],
-        Refinement::Orders { top: 7 },
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
     )
     .unwrap();
     assert_eq!(small.dominant_source(), Some(Source::Refinement));
     // Three values: no companion across, nothing separated.
-    let three = Estimate::scalar_of(&values[..3], Refinement::Orders { top: 7 }).unwrap();
+    let three = Estimate::scalar_of(
+        &values[..3],
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    )
+    .unwrap();
     assert_eq!((three.across, three.dominant_source()), (None, None));
-    assert!(Estimate::scalar_of(&values[..2], Refinement::Orders { top: 7 }).is_err());
-    assert!(Estimate::scalar_of(&[1.0; 6], Refinement::Orders { top: 7 }).is_err());
+    assert!(Estimate::scalar_of(
+        &values[..2],
+        Refinement::Orders {
+            top: 7,
+            across: true
+        }
+    )
+    .is_err());
+    assert!(Estimate::scalar_of(
+        &[1.0; 6],
+        Refinement::Orders {
+            top: 7,
+            across: true
+        }
+    )
+    .is_err());
     // A bound along x (a fall of 8x per order: d_1 = 1.4e-3) stays a bound with a smaller
     // error across, and becomes an estimate where the error across dominates it.
     let fast = |p: i32| 1.0 + 0.1 * 8f64.powi(-(p - 4));
@@ -284,7 +419,10 @@ fn the_error_across_adds_to_the_error_along_x_and_names_the_dominant_source() {
     ] {
         let e = Estimate::scalar_of(
             &[fast(7), fast(6), fast(5), fast(7) + d_y],
-            Refinement::Orders { top: 7 },
+            Refinement::Orders {
+                top: 7,
+                across: true,
+            },
         )
         .unwrap();
         assert_eq!(e.verdict, verdict, "{e:?}");
@@ -299,18 +437,36 @@ fn the_error_across_adds_to_the_error_along_x_and_names_the_dominant_source() {
 #[test]
 fn where_the_companions_along_x_agree_the_error_across_is_the_error() {
     // Normal incidence: the solution does not vary along x.
-    let e = Estimate::dimensionless_of(&[0.5, 0.5, 0.5, 0.5 + 2e-4], Refinement::Orders { top: 7 })
-        .unwrap();
+    let e = Estimate::dimensionless_of(
+        &[0.5, 0.5, 0.5, 0.5 + 2e-4],
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    )
+    .unwrap();
     assert_eq!(e.verdict, Verdict::Reliable);
     assert!((e.error.unwrap() - ACROSS_TAIL * 2e-4).abs() < 1e-15);
     assert_eq!(e.dominant_source(), Some(Source::Across));
     // Round-off across as well: mesh-independent.
-    let same =
-        Estimate::dimensionless_of(&[0.5, 0.5, 0.5, 0.5 + 1e-14], Refinement::Orders { top: 7 })
-            .unwrap();
+    let same = Estimate::dimensionless_of(
+        &[0.5, 0.5, 0.5, 0.5 + 1e-14],
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    )
+    .unwrap();
     assert_eq!(same.verdict, Verdict::MeshIndependent);
     // A "refine" along x stays one: no error is claimed.
-    let refine = Estimate::scalar_of(&[1.0, 1.2, 1.0, 1.1], Refinement::Orders { top: 7 }).unwrap();
+    let refine = Estimate::scalar_of(
+        &[1.0, 1.2, 1.0, 1.1],
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    )
+    .unwrap();
     assert_eq!((refine.verdict, refine.error), (Verdict::Refine, None));
     assert!((refine.across.unwrap() - 0.1).abs() < 1e-12);
 }
@@ -330,7 +486,10 @@ fn a_waveforms_error_across_is_its_relative_l2_difference() {
     let e = Estimate::waveform_of(
         &[&f, &f, &f, &across],
         (0.0, 1e-7),
-        Refinement::Orders { top: 7 },
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
     )
     .unwrap();
     assert!(
@@ -344,11 +503,24 @@ fn a_waveforms_error_across_is_its_relative_l2_difference() {
         Signal::new(dt, 0.0, samples).unwrap()
     };
     let (f, m, c) = (shifted(0.0), shifted(0.01), shifted(0.03));
-    let along = Estimate::waveform(&f, &m, &c, (0.0, 1e-7), Refinement::Orders { top: 7 }).unwrap();
+    let along = Estimate::waveform(
+        &f,
+        &m,
+        &c,
+        (0.0, 1e-7),
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    )
+    .unwrap();
     let both = Estimate::waveform_of(
         &[&f, &m, &c, &across],
         (0.0, 1e-7),
-        Refinement::Orders { top: 7 },
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
     )
     .unwrap();
     let expected = along
@@ -364,7 +536,14 @@ fn the_error_in_time_adds_to_the_others_and_can_dominate() {
     // step moves it 3.4e-4 (the quick preset's, docs/src/validation/default-experiment.md).
     let m = 0.1193;
     let values = [m, m + 1e-5, m + 3e-5, m + 1e-5, m + 3.4e-4];
-    let e = Estimate::dimensionless_of(&values, Refinement::Orders { top: 7 }).unwrap();
+    let e = Estimate::dimensionless_of(
+        &values,
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    )
+    .unwrap();
     let step = e.step.unwrap();
     assert!((step - 3.4e-4).abs() < 1e-15, "{e:?}");
     assert!((e.step_error().unwrap() - STEP_TAIL * 3.4e-4).abs() < 1e-15);
@@ -375,9 +554,28 @@ fn the_error_in_time_adds_to_the_others_and_can_dominate() {
     let text = e.describe();
     assert!(text.contains("in time 4.81e-4, in time dominant"), "{text}");
     // Without the companion at half the step the error in time is not there.
-    let four = Estimate::dimensionless_of(&values[..4], Refinement::Orders { top: 7 }).unwrap();
+    let four = Estimate::dimensionless_of(
+        &values[..4],
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
+    )
+    .unwrap();
     assert!(four.error.unwrap() < 1e-4, "{four:?}");
     assert_eq!((four.step, four.step_error()), (None, None));
+    // On a Gmsh mesh (no companion across) the fourth value is the one at half the step.
+    let gmsh = Refinement::Orders {
+        top: 7,
+        across: false,
+    };
+    let on_mesh = Estimate::dimensionless_of(&[m, m + 1e-5, m + 3e-5, m + 3.4e-4], gmsh).unwrap();
+    assert_eq!(on_mesh.across, None);
+    assert!(
+        (on_mesh.step.unwrap() - 3.4e-4).abs() < 1e-15,
+        "{on_mesh:?}"
+    );
+    assert!(Estimate::dimensionless_of(&values, gmsh).is_err());
     // A waveform's error in time adds in quadrature.
     let dt = 1e-9;
     let wave = |a: f64| {
@@ -388,7 +586,10 @@ fn the_error_in_time_adds_to_the_others_and_can_dominate() {
     let w = Estimate::waveform_of(
         &[&f, &f, &f, &across, &halved],
         (0.0, 1e-7),
-        Refinement::Orders { top: 7 },
+        Refinement::Orders {
+            top: 7,
+            across: true,
+        },
     )
     .unwrap();
     let expected = (ACROSS_TAIL * 0.003).hypot(STEP_TAIL * 0.01);

@@ -191,8 +191,8 @@ impl SceneSpec {
     ///
     /// On a Gmsh mesh of quadrilaterals (`gmsh.order` p) the companions are the same mesh at
     /// orders p - 1 and p - 2, in both directions (an unstructured element has no direction
-    /// across), at step `dt_s`; there is no third, and none at half the step (a crack's
-    /// step error on a Gmsh mesh is not estimated). A Gmsh mesh of triangles has none: its
+    /// across), at step `dt_s`, and with contact the scene at half the step; there is no
+    /// companion across. A Gmsh mesh of triangles has none: its
     /// mesh is the file's (an error).
     pub fn companions(&self, dt_s: f64) -> Result<Vec<SceneSpec>> {
         if let Some(g) = &self.gmsh {
@@ -239,13 +239,19 @@ impl SceneSpec {
                 };
                 let mut companions = vec![along_x(1), along_x(2), across];
                 if self.contact().is_some() {
-                    companions.push(SceneSpec {
-                        time_step_s: Some(dt_s / 2.0),
-                        ..self.clone()
-                    });
+                    companions.push(self.at_half_the_step(dt_s));
                 }
                 Ok(companions)
             }
+        }
+    }
+
+    /// The companion in time of a scene with contact run at step `dt_s`: the same scene at
+    /// half that step ([`SceneSpec::companions`]).
+    fn at_half_the_step(&self, dt_s: f64) -> SceneSpec {
+        SceneSpec {
+            time_step_s: Some(dt_s / 2.0),
+            ..self.clone()
         }
     }
 
@@ -262,7 +268,7 @@ impl SceneSpec {
                  they need order >= 3",
             ));
         }
-        Ok([1, 2]
+        let mut companions: Vec<SceneSpec> = [1, 2]
             .map(|by| SceneSpec {
                 gmsh: Some(GmshSpec {
                     order: Some(order - by),
@@ -271,13 +277,20 @@ impl SceneSpec {
                 time_step_s: Some(dt_s),
                 ..self.clone()
             })
-            .into())
+            .into();
+        if self.contact().is_some() {
+            companions.push(self.at_half_the_step(dt_s));
+        }
+        Ok(companions)
     }
 
     /// The companions of [`SceneSpec::companions`], as the messages name them.
     pub fn companions_named(&self) -> &'static str {
         if self.gmsh.as_ref().is_some_and(|g| g.order.is_some()) {
-            return "orders p-1 and p-2";
+            return match self.contact() {
+                Some(_) => "orders p-1 and p-2 and half the step",
+                None => "orders p-1 and p-2",
+            };
         }
         match self.discretisation {
             DiscretisationSpec::T3 => "2h and 4h",
@@ -306,11 +319,14 @@ impl SceneSpec {
     /// both directions).
     pub fn refinement(&self) -> Refinement {
         if let Some(top) = self.gmsh.as_ref().and_then(|g| g.order) {
-            return Refinement::Orders { top };
+            return Refinement::Orders { top, across: false };
         }
         match self.discretisation {
             DiscretisationSpec::T3 => Refinement::ElementSizes,
-            DiscretisationSpec::Sem { order_x, .. } => Refinement::Orders { top: order_x },
+            DiscretisationSpec::Sem { order_x, .. } => Refinement::Orders {
+                top: order_x,
+                across: true,
+            },
         }
     }
 
