@@ -183,7 +183,7 @@ pub(crate) fn smaller(a: Option<f64>, b: Option<f64>) -> Option<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::Refinement;
+    use super::super::tests::LAYERED_7;
     use super::*;
     use crate::signal::Signal;
 
@@ -207,10 +207,7 @@ mod tests {
             &trace(vec![1.0; 4]),
             &trace(vec![1.0; 4]),
             (0.0, 3.0),
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
+            LAYERED_7,
         )
         .unwrap();
         (w.error, w.verdict) = (Some(e), Verdict::Reliable);
@@ -227,15 +224,7 @@ mod tests {
         let m = misfit(&s, &p);
         let (e_p, e_r) = (0.01, 0.05);
         // differences that change sign and grow: "refine" of its own
-        let own = Estimate::dimensionless(
-            m,
-            m + 0.003,
-            m + 0.001,
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        );
+        let own = Estimate::dimensionless(m, m + 0.003, m + 0.001, LAYERED_7);
         assert_eq!(own.verdict, Verdict::Refine);
         let r: Vec<f64> = s.iter().zip(&p).map(|(a, b)| a - b).collect();
         let ratio = norm(&s) / norm(&p);
@@ -281,29 +270,13 @@ mod tests {
     /// keeps it; without a stated prediction error there is no bound.
     #[test]
     fn traces_route_own_estimates_and_missing_errors() {
-        let own = Estimate::dimensionless(
-            0.1,
-            0.103,
-            0.101,
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        );
+        let own = Estimate::dimensionless(0.1, 0.103, 0.101, LAYERED_7);
         assert_eq!(own.verdict, Verdict::Refine);
         let mut refine = waveform(0.0);
         (refine.error, refine.verdict) = (None, Verdict::Refine);
         let b = Estimate::relative_misfit(own, &waveform(0.02), &waveform(0.01), &refine, 1.1);
         assert!((b.error.unwrap() - (0.02 * 1.1 + 0.01 + 0.1 * 0.01) / 0.99).abs() < 1e-15);
-        let linear = Estimate::dimensionless(
-            1e-13,
-            2e-13,
-            1e-13,
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        );
+        let linear = Estimate::dimensionless(1e-13, 2e-13, 1e-13, LAYERED_7);
         let kept = Estimate::relative_misfit(
             linear,
             &waveform(0.02),
@@ -312,15 +285,7 @@ mod tests {
             1.0,
         );
         assert_eq!(kept, linear);
-        let converging = Estimate::dimensionless(
-            0.1,
-            0.1004,
-            0.1012,
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        );
+        let converging = Estimate::dimensionless(0.1, 0.1004, 0.1012, LAYERED_7);
         assert_eq!(converging.verdict, Verdict::Reliable);
         let kept = Estimate::relative_misfit(
             converging,
@@ -346,15 +311,7 @@ mod tests {
     /// errors move the ratio further; a ratio whose own estimate holds keeps it.
     #[test]
     fn peak_ratio_bound_is_the_corner() {
-        let own = Estimate::dimensionless(
-            0.06,
-            0.063,
-            0.061,
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        );
+        let own = Estimate::dimensionless(0.06, 0.063, 0.061, LAYERED_7);
         assert_eq!(own.verdict, Verdict::Refine);
         let (e_n, e_d) = (0.04, 0.01);
         let stated = Estimate::peak_ratio(own, Some(e_n), &waveform(e_d));
@@ -369,15 +326,7 @@ mod tests {
             }
         }
         assert!((largest - bound).abs() < 1e-15, "{largest} vs {bound}");
-        let converging = Estimate::dimensionless(
-            0.1,
-            0.1004,
-            0.1012,
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        );
+        let converging = Estimate::dimensionless(0.1, 0.1004, 0.1012, LAYERED_7);
         assert_eq!(
             Estimate::peak_ratio(converging, Some(e_n), &waveform(e_d)),
             converging
@@ -409,15 +358,7 @@ mod tests {
         let energy = |x: &[f64]| x.iter().map(|v| v * v).sum::<f64>();
         let asymmetry = |a: &[f64], b: &[f64]| (energy(a) - energy(b)) / (energy(a) + energy(b));
         let a = asymmetry(&after, &before);
-        let own = Estimate::dimensionless(
-            a,
-            a + 0.03,
-            a + 0.01,
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        );
+        let own = Estimate::dimensionless(a, a + 0.03, a + 0.01, LAYERED_7);
         assert_eq!(own.verdict, Verdict::Refine);
         let (e_b, e_a) = (0.05, 0.03);
         let stated = Estimate::energy_asymmetry(

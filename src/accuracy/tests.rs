@@ -3,6 +3,12 @@
 
 use super::*;
 
+/// The layered rectangle's refinement at order 7 (companions along x, then across).
+pub(super) const LAYERED_7: Refinement = Refinement::Orders {
+    top: 7,
+    across: true,
+};
+
 #[test]
 fn power_law_gives_exact_richardson_error() {
     // Q_h = 1 + 0.3 h^2: at h = 0.1 the error is 3e-3 and the estimate exact.
@@ -62,17 +68,7 @@ fn a_waveforms_tail_along_x_is_fitted_at_any_fall() {
     ] {
         let a = 4e-3;
         let [p, p1, p2] = slow_traces(a, rho, c);
-        let e = Estimate::waveform(
-            &p,
-            &p1,
-            &p2,
-            (0.0, 1.0),
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        )
-        .unwrap();
+        let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), LAYERED_7).unwrap();
         // the error at a constant fall, and what the top fall 6/7 rho makes of it
         let truth = a / (1.0 + a * a).sqrt();
         let spread = |r: f64| (1.0 + 1.0 / (r * r) - 2.0 * c / r).sqrt();
@@ -93,15 +89,7 @@ fn a_waveforms_tail_along_x_is_fitted_at_any_fall() {
         );
     }
     let q = |p: i32| 1.0 + 0.01 * 0.75f64.powi(p);
-    let e = Estimate::scalar(
-        q(7),
-        q(6),
-        q(5),
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    );
+    let e = Estimate::scalar(q(7), q(6), q(5), LAYERED_7);
     assert_eq!(e.verdict, Verdict::Reliable);
     // the geometric tail at the top fall 6/7 of 0.75
     let top = 0.75 * 6.0 / 7.0;
@@ -109,18 +97,7 @@ fn a_waveforms_tail_along_x_is_fitted_at_any_fall() {
     assert!((e.error.unwrap() / tail - 1.0).abs() < 1e-9, "{e:?}");
     assert_eq!(e.correlation, Some(1.0));
     // Stored with the sweep's points (postcard: every field written, with or without a fit).
-    for stored in [
-        e,
-        Estimate::scalar(
-            1.0,
-            1.0,
-            1.0,
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        ),
-    ] {
+    for stored in [e, Estimate::scalar(1.0, 1.0, 1.0, LAYERED_7)] {
         let back: Estimate = crate::sweep::decode(&crate::sweep::encode(&stored).unwrap()).unwrap();
         assert_eq!(back, stored);
     }
@@ -148,16 +125,7 @@ fn a_fast_fall_from_low_order_companions_keeps_the_bound() {
         (low.error, low.correlation),
         (Some(low.companions[0]), None)
     );
-    let high = Estimate::waveform(
-        &p,
-        &p1,
-        &p2,
-        window,
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    );
+    let high = Estimate::waveform(&p, &p1, &p2, window, LAYERED_7);
     let high = high.unwrap();
     assert_eq!(high.verdict, Verdict::Reliable, "{high:?}");
     assert!(high.error.unwrap() < 0.3 * high.companions[0], "{high:?}");
@@ -169,43 +137,16 @@ fn a_fall_slower_than_the_slowest_or_unfit_says_refine() {
     // 10% per order, the errors aligned: too little of the fall to rest a tail on, too
     // aligned to be a scatter.
     let [p, p1, p2] = slow_traces(4e-3, 0.9, 0.8);
-    let e = Estimate::waveform(
-        &p,
-        &p1,
-        &p2,
-        (0.0, 1.0),
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), LAYERED_7).unwrap();
     assert_eq!(e.verdict, Verdict::Refine, "{e:?}");
     assert!(e.error.is_none() && e.correlation.is_none());
     // Triangles keep their order-2 test: a slow fall of element sizes is not fitted.
     let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), Refinement::ElementSizes).unwrap();
     assert_eq!(e.verdict, Verdict::Refine, "{e:?}");
     // No correlation fits differences with d_13 > d_1 + d_2 (not a triangle).
-    assert!(fitted_tail(
-        1.0,
-        1.3,
-        Some(2.5),
-        Refinement::Orders {
-            top: 7,
-            across: true
-        }
-    )
-    .is_none());
+    assert!(fitted_tail(1.0, 1.3, Some(2.5), LAYERED_7).is_none());
     // A scalar whose differences change sign and grow: refine.
-    let e = Estimate::scalar(
-        1.003,
-        1.007,
-        1.004,
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    );
+    let e = Estimate::scalar(1.003, 1.007, 1.004, LAYERED_7);
     assert_eq!(e.verdict, Verdict::Refine, "{e:?}");
 }
 
@@ -219,16 +160,7 @@ fn errors_that_do_not_fall_are_their_scatter_where_mostly_independent() {
     let truth = a / (1.0 + a * a).sqrt();
     for c in [-0.3, 0.0, 0.3, 0.45] {
         let [p, p1, p2] = slow_traces(a, 1.0, c);
-        let e = Estimate::waveform(
-            &p,
-            &p1,
-            &p2,
-            (0.0, 1.0),
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        );
+        let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), LAYERED_7);
         let e = e.unwrap();
         assert_eq!(e.verdict, Verdict::Reliable, "c {c}: {e:?}");
         assert!(
@@ -239,16 +171,7 @@ fn errors_that_do_not_fall_are_their_scatter_where_mostly_independent() {
     }
     for c in [0.6, 0.9] {
         let [p, p1, p2] = slow_traces(a, 1.0, c);
-        let e = Estimate::waveform(
-            &p,
-            &p1,
-            &p2,
-            (0.0, 1.0),
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        );
+        let e = Estimate::waveform(&p, &p1, &p2, (0.0, 1.0), LAYERED_7);
         assert_eq!(e.unwrap().verdict, Verdict::Refine, "c {c}");
     }
 }
@@ -261,15 +184,7 @@ fn a_scalars_alternating_errors_along_x_are_bounded_by_d1() {
     let a = 2e-3;
     for rho in [0.8, 0.5, 0.1] {
         let q = |p: i32| 0.05 + a * (-1.0f64 / rho).powi(7 - p);
-        let e = Estimate::scalar(
-            q(7),
-            q(6),
-            q(5),
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        );
+        let e = Estimate::scalar(q(7), q(6), q(5), LAYERED_7);
         assert_eq!(e.verdict, Verdict::UpperBound, "rho {rho}: {e:?}");
         let bound = e.error.unwrap();
         assert!(
@@ -282,15 +197,7 @@ fn a_scalars_alternating_errors_along_x_are_bounded_by_d1() {
     }
     for rho in [0.9, 1.2] {
         let q = |p: i32| 0.05 + a * (-1.0f64 / rho).powi(7 - p);
-        let e = Estimate::scalar(
-            q(7),
-            q(6),
-            q(5),
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        );
+        let e = Estimate::scalar(q(7), q(6), q(5), LAYERED_7);
         assert_eq!(e.verdict, Verdict::Refine, "rho {rho}: {e:?}");
     }
 }
@@ -359,14 +266,7 @@ fn the_error_across_adds_to_the_error_along_x_and_names_the_dominant_source() {
     let along = 0.3 * 2f64.powi(-7);
     let across = 3.0 * along;
     let values = [q(7), q(6), q(5), q(7) + across];
-    let e = Estimate::scalar_of(
-        &values,
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let e = Estimate::scalar_of(&values, LAYERED_7).unwrap();
     assert_eq!(e.verdict, Verdict::Reliable);
     let expected = along + ACROSS_TAIL * across;
     assert!((e.error.unwrap() - expected).abs() < 1e-12, "{e:?}");
@@ -374,41 +274,13 @@ fn the_error_across_adds_to_the_error_along_x_and_names_the_dominant_source() {
     assert_eq!(e.dominant_source(), Some(Source::Across));
     let text = e.describe();
     assert!(text.contains("across the layers dominant"), "{text}");
-    let small = Estimate::scalar_of(
-        &[q(7), q(6), q(5), q(7) + 0.1 * along],
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let small = Estimate::scalar_of(&[q(7), q(6), q(5), q(7) + 0.1 * along], LAYERED_7).unwrap();
     assert_eq!(small.dominant_source(), Some(Source::Refinement));
     // Three values: no companion across, nothing separated.
-    let three = Estimate::scalar_of(
-        &values[..3],
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let three = Estimate::scalar_of(&values[..3], LAYERED_7).unwrap();
     assert_eq!((three.across, three.dominant_source()), (None, None));
-    assert!(Estimate::scalar_of(
-        &values[..2],
-        Refinement::Orders {
-            top: 7,
-            across: true
-        }
-    )
-    .is_err());
-    assert!(Estimate::scalar_of(
-        &[1.0; 6],
-        Refinement::Orders {
-            top: 7,
-            across: true
-        }
-    )
-    .is_err());
+    assert!(Estimate::scalar_of(&values[..2], LAYERED_7).is_err());
+    assert!(Estimate::scalar_of(&[1.0; 6], LAYERED_7).is_err());
     // A bound along x (a fall of 8x per order: d_1 = 1.4e-3) stays a bound with a smaller
     // error across, and becomes an estimate where the error across dominates it.
     let fast = |p: i32| 1.0 + 0.1 * 8f64.powi(-(p - 4));
@@ -417,14 +289,8 @@ fn the_error_across_adds_to_the_error_along_x_and_names_the_dominant_source() {
         (0.1 * bound, Verdict::UpperBound),
         (bound, Verdict::Reliable),
     ] {
-        let e = Estimate::scalar_of(
-            &[fast(7), fast(6), fast(5), fast(7) + d_y],
-            Refinement::Orders {
-                top: 7,
-                across: true,
-            },
-        )
-        .unwrap();
+        let e =
+            Estimate::scalar_of(&[fast(7), fast(6), fast(5), fast(7) + d_y], LAYERED_7).unwrap();
         assert_eq!(e.verdict, verdict, "{e:?}");
         let expected = bound + ACROSS_TAIL * d_y;
         assert!(
@@ -437,36 +303,15 @@ fn the_error_across_adds_to_the_error_along_x_and_names_the_dominant_source() {
 #[test]
 fn where_the_companions_along_x_agree_the_error_across_is_the_error() {
     // Normal incidence: the solution does not vary along x.
-    let e = Estimate::dimensionless_of(
-        &[0.5, 0.5, 0.5, 0.5 + 2e-4],
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let e = Estimate::dimensionless_of(&[0.5, 0.5, 0.5, 0.5 + 2e-4], LAYERED_7).unwrap();
     assert_eq!(e.verdict, Verdict::Reliable);
     assert!((e.error.unwrap() - ACROSS_TAIL * 2e-4).abs() < 1e-15);
     assert_eq!(e.dominant_source(), Some(Source::Across));
     // Round-off across as well: mesh-independent.
-    let same = Estimate::dimensionless_of(
-        &[0.5, 0.5, 0.5, 0.5 + 1e-14],
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let same = Estimate::dimensionless_of(&[0.5, 0.5, 0.5, 0.5 + 1e-14], LAYERED_7).unwrap();
     assert_eq!(same.verdict, Verdict::MeshIndependent);
     // A "refine" along x stays one: no error is claimed.
-    let refine = Estimate::scalar_of(
-        &[1.0, 1.2, 1.0, 1.1],
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let refine = Estimate::scalar_of(&[1.0, 1.2, 1.0, 1.1], LAYERED_7).unwrap();
     assert_eq!((refine.verdict, refine.error), (Verdict::Refine, None));
     assert!((refine.across.unwrap() - 0.1).abs() < 1e-12);
 }
@@ -483,15 +328,7 @@ fn a_waveforms_error_across_is_its_relative_l2_difference() {
         .unwrap()
     };
     let (f, across) = (wave(1.0), wave(1.01));
-    let e = Estimate::waveform_of(
-        &[&f, &f, &f, &across],
-        (0.0, 1e-7),
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let e = Estimate::waveform_of(&[&f, &f, &f, &across], (0.0, 1e-7), LAYERED_7).unwrap();
     assert!(
         (e.error.unwrap() - ACROSS_TAIL * 0.01).abs() < 1e-12,
         "{e:?}"
@@ -503,26 +340,8 @@ fn a_waveforms_error_across_is_its_relative_l2_difference() {
         Signal::new(dt, 0.0, samples).unwrap()
     };
     let (f, m, c) = (shifted(0.0), shifted(0.01), shifted(0.03));
-    let along = Estimate::waveform(
-        &f,
-        &m,
-        &c,
-        (0.0, 1e-7),
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
-    let both = Estimate::waveform_of(
-        &[&f, &m, &c, &across],
-        (0.0, 1e-7),
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let along = Estimate::waveform(&f, &m, &c, (0.0, 1e-7), LAYERED_7).unwrap();
+    let both = Estimate::waveform_of(&[&f, &m, &c, &across], (0.0, 1e-7), LAYERED_7).unwrap();
     let expected = along
         .error
         .unwrap()
@@ -536,14 +355,7 @@ fn the_error_in_time_adds_to_the_others_and_can_dominate() {
     // step moves it 3.4e-4 (the quick preset's, docs/src/validation/default-experiment.md).
     let m = 0.1193;
     let values = [m, m + 1e-5, m + 3e-5, m + 1e-5, m + 3.4e-4];
-    let e = Estimate::dimensionless_of(
-        &values,
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let e = Estimate::dimensionless_of(&values, LAYERED_7).unwrap();
     let step = e.step.unwrap();
     assert!((step - 3.4e-4).abs() < 1e-15, "{e:?}");
     assert!((e.step_error().unwrap() - STEP_TAIL * 3.4e-4).abs() < 1e-15);
@@ -554,14 +366,7 @@ fn the_error_in_time_adds_to_the_others_and_can_dominate() {
     let text = e.describe();
     assert!(text.contains("in time 4.81e-4, in time dominant"), "{text}");
     // Without the companion at half the step the error in time is not there.
-    let four = Estimate::dimensionless_of(
-        &values[..4],
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let four = Estimate::dimensionless_of(&values[..4], LAYERED_7).unwrap();
     assert!(four.error.unwrap() < 1e-4, "{four:?}");
     assert_eq!((four.step, four.step_error()), (None, None));
     // On a Gmsh mesh (no companion across) the fourth value is the one at half the step.
@@ -583,15 +388,7 @@ fn the_error_in_time_adds_to_the_others_and_can_dominate() {
         Signal::new(dt, 0.0, samples).unwrap()
     };
     let (f, across, halved) = (wave(1.0), wave(1.003), wave(1.01));
-    let w = Estimate::waveform_of(
-        &[&f, &f, &f, &across, &halved],
-        (0.0, 1e-7),
-        Refinement::Orders {
-            top: 7,
-            across: true,
-        },
-    )
-    .unwrap();
+    let w = Estimate::waveform_of(&[&f, &f, &f, &across, &halved], (0.0, 1e-7), LAYERED_7).unwrap();
     let expected = (ACROSS_TAIL * 0.003).hypot(STEP_TAIL * 0.01);
     assert!((w.error.unwrap() - expected).abs() < 1e-12, "{w:?}");
     assert_eq!(w.brief(), "err 1.5% (mostly in time)");

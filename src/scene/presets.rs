@@ -185,15 +185,15 @@ impl SceneSpec {
     /// it). Companions along x that chose their own rows and steps saw an error across of
     /// their own, 1.4-12x the true error at oblique incidence
     /// (docs/src/validation/normal-incidence.md). Where the crack's faces touch (a contact),
-    /// last the scene at half the step `dt_s`: the step's error in the contact, which the
-    /// time-dispersion transforms do not remove and the others, at the step or near it, do
-    /// not see apart from the error across ([`crate::accuracy`]).
+    /// last the scene at half the step `dt_s`: it sees the contact's error in the step, which
+    /// the time-dispersion transforms do not remove and the others share, at that step (or,
+    /// across, near it; [`crate::accuracy`]).
     ///
     /// On a Gmsh mesh of quadrilaterals (`gmsh.order` p) the companions are the same mesh at
     /// orders p - 1 and p - 2, in both directions (an unstructured element has no direction
     /// across), at step `dt_s`, and with contact the scene at half the step; there is no
-    /// companion across. A Gmsh mesh of triangles has none: its
-    /// mesh is the file's (an error).
+    /// companion across. A Gmsh mesh of triangles has none: its mesh is the file's (an
+    /// error).
     pub fn companions(&self, dt_s: f64) -> Result<Vec<SceneSpec>> {
         if let Some(g) = &self.gmsh {
             return self.mesh_order_companions(g, dt_s);

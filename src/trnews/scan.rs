@@ -44,8 +44,9 @@ impl Scan {
     /// The crack's spectral shift at each scanned position: the mean frequency
     /// ([`mean_frequency_hz`]) of the first-pass response less `baseline`'s (the uncracked
     /// scene's scan of the same receivers), with its estimate from the shifts on the
-    /// companions when both scans have them, or where those say "refine" a bound from the two
-    /// responses' errors ([`Estimate::mean_frequency_shift`]).
+    /// companions when both scans have them (a linear baseline has none at half the step: its
+    /// main run is paired with the cracked scan's), or where those say "refine" a bound from
+    /// the two responses' errors ([`Estimate::mean_frequency_shift`]).
     pub fn spectral_shifts(&self, baseline: &Scan) -> Result<Vec<(f64, Option<Estimate>)>> {
         if self.receivers != baseline.receivers {
             return Err(Error::invalid(
