@@ -207,15 +207,22 @@ fn estimates_hold_against_the_reference(table: &std::path::Path) {
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let (trace, verdict, ratio) = (
+    let (trace, verdict, ratio, in_time) = (
         column("trace"),
         column("verdict"),
         column("estimate_vs_error"),
+        column("difference_at_half_the_step"),
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 4, "{text}");
     for row in rows {
         assert_eq!(row[verdict], "reliable", "{}: {text}", row[trace]);
+        // the companion at half the step where the faces touch, and only there
+        assert_eq!(
+            row[in_time].is_empty(),
+            row[trace].starts_with("uncracked"),
+            "{text}"
+        );
         let r: f64 = row[ratio].parse().unwrap();
         assert!(
             (0.5..=2.0).contains(&r),
