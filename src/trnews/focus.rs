@@ -293,7 +293,13 @@ pub(super) fn focus_estimates(
         response: Estimate::waveform_of(&responses, (0.0, spec.record_s), refinement)?,
         peak_amplitude: scalar(&|x| x.peak.amplitude)?,
         peak_time_s: scalar(&|x| x.peak.time_s)?,
-        side_lobe_asymmetry: side_lobe_asymmetry(f, &focused, &focused_estimate, spec, refinement)?,
+        side_lobe_asymmetry: side_lobe_asymmetry(
+            f,
+            &focused,
+            (&focused_estimate, focus_window),
+            spec,
+            refinement,
+        )?,
         main_to_side_db: scalar(&|x| x.side_lobes.main_to_side_db)?,
         pi_residual: pi_residual(f, &focused_estimate, focus_window, refinement)?,
         focused: focused_estimate,
@@ -302,12 +308,13 @@ pub(super) fn focus_estimates(
 
 /// The side-lobe asymmetry's estimate: its own, or where that says "refine" a bound from the
 /// focused signal's errors over the two side windows ([`Estimate::energy_asymmetry`]): each
-/// window's own estimate, or, the smaller where both are stated, the focus window's error,
-/// which contains it: ||dy||_side <= e_f ||y||_focus.
+/// window's own estimate, or, the smaller where both are stated, the error of the focus
+/// window (`focus`: the focused signal's estimate there, and the window), which contains it:
+/// ||dy||_side <= e_f ||y||_focus.
 fn side_lobe_asymmetry(
     f: &[&Focus],
     focused: &[&Signal],
-    focused_estimate: &Estimate,
+    (focused_estimate, focus_window): (&Estimate, (f64, f64)),
     spec: &TrNewsSpec,
     refinement: Refinement,
 ) -> Result<Estimate> {
@@ -320,10 +327,7 @@ fn side_lobe_asymmetry(
     );
     let focus_energy = f[0]
         .focused
-        .window(
-            spec.window_s - spec.after_focus_s,
-            spec.window_s + spec.after_focus_s,
-        )?
+        .window(focus_window.0, focus_window.1)?
         .energy();
     let side_error = |window: (f64, f64), energy: f64| -> Result<Option<f64>> {
         let own = Estimate::waveform_of(focused, window, refinement)?.stated();
