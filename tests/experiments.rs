@@ -127,6 +127,9 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
     the_friction_response_time_narrows_the_spread(
         &out.join("plots/sem_target_friction_spread.csv"),
     );
+    estimates_hold_with_the_friction_response_time(
+        &out.join("plots/sem_target_friction_spread_estimate.csv"),
+    );
     let _ = std::fs::remove_dir_all(&out);
 }
 

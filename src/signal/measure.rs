@@ -95,7 +95,7 @@ fn half_crossings(env: &[f64], centre: usize, level: f64) -> (f64, f64) {
 /// The windows do not move with the sampling: edges on the sample grid would move each side
 /// energy by up to one sample's x^2 dt at the main lobe's edge, where the signal is large,
 /// an error of first order in dt (4e-4 of the default experiment's cracked asymmetry at the
-/// quick preset's step, ten times its discretisation's change at half the step).
+/// quick preset's step, six times its discretisation's change at half the step).
 pub fn side_lobes(
     s: &Signal,
     focus_time_s: f64,

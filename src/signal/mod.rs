@@ -29,7 +29,7 @@ pub use delay::{delay, delay_and_sum, time_reverse, time_reverse_to_start};
 pub use fft::{causal_response, convolve, convolve_discrete, xcorr};
 pub use filter::{butterworth, filtfilt, sosfilt, Biquad, FilterKind, Sos};
 pub use hilbert::{analytic, envelope, instantaneous_frequency};
-pub use measure::{peak, relative_l2, side_lobes, Peak, SideLobes};
+pub use measure::{peak, relative_l2, side_lobes, window_energy, window_max_abs, Peak, SideLobes};
 pub use resample::resample;
 pub use spectrum::{periodogram, welch, Detrend, Spectrum, Window};
 pub use warp::{smooth_step, warp_spectrum, ROLL_OFF_PERIODS};
