@@ -310,16 +310,15 @@ fn a_scan_is_tr_news_at_each_position() {
 
 /// The instantaneous Coulomb law makes the cracked focusing ill-conditioned on spectral
 /// elements; a friction response time does not. A change of 1e-6 of the friction coefficient
-/// moves the cracked smoke preset's focused signal y_TR by 37x that (relative L2 over the focus window) with the
-/// instantaneous law, and by 0.045x with the strength following the normal force over 20 ns
-/// (measured; the first-pass response moves by 0.06x and 0.03x; on the report's triangles,
-/// whose linear crack faces do not chatter, y_TR moves by 0.044x under either law). So under
-/// the instantaneous
-/// law any small change of the discretisation (an order, a step, the code's round-off) is
-/// amplified in y_TR and the measures made from it, and their companions cannot converge to
-/// better than that amplified scatter (docs/src/validation/default-experiment.md, "The
-/// instantaneous law's sensitivity"). Asserted: above 10x, and below 1x with the response
-/// time.
+/// moves the cracked smoke preset's focused signal y_TR by 37x that (relative L2 over the
+/// focus window) with the instantaneous law, and by 0.045x with the strength following the
+/// normal force over 20 ns (measured; the first-pass response moves by 0.06x and 0.03x; on
+/// the report's triangles, whose linear crack faces do not chatter, y_TR moves by 0.044x
+/// under either law). So under the instantaneous law any small change of the discretisation
+/// (an order, a step) is amplified in y_TR and the measures made from it, and their
+/// companions cannot converge to better than that amplified scatter
+/// (docs/src/validation/default-experiment.md, "Why the PI residual's and the asymmetry's
+/// companions do not converge"). Asserted: above 10x, and below 1x with the response time.
 #[test]
 fn the_instantaneous_friction_law_amplifies_a_change_of_the_coefficient_in_the_focus() {
     let eps = 1e-6;
