@@ -179,18 +179,48 @@ fn losses_weaken_the_focus(table: &std::path::Path) {
 /// among the trains, every train's uncracked misfit is round-off (the linear prediction is
 /// exact while the last delay keeps the first copy's y_TR in the misfit window; measured
 /// 1.4e-15 to 3.9e-15) and its cracked misfit is not (measured 0.029 to 0.086).
+/// A CSV table a script wrote: its text (quoted in failure messages), its header's columns
+/// and its rows of cells.
+struct Table {
+    text: String,
+}
+
+impl Table {
+    fn read(path: &Path) -> Table {
+        let text =
+            std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        Table { text }
+    }
+
+    /// The index of column `name` in the header.
+    fn column(&self, name: &str) -> usize {
+        let header = self.text.lines().next().unwrap_or_default();
+        header
+            .split(',')
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("no column {name}: {}", self.text))
+    }
+
+    /// The rows below the header, each split into its cells.
+    fn rows(&self) -> Vec<Vec<&str>> {
+        self.text
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect())
+            .collect()
+    }
+}
+
 fn tuned_trains_are_linear_without_the_crack(table: &std::path::Path) {
-    let text = std::fs::read_to_string(table).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let table = Table::read(table);
+    let text = &table.text;
     let (family, tuned, misfit, uncracked) = (
-        column("family"),
-        column("tuned"),
-        column("misfit"),
-        column("misfit_uncracked"),
+        table.column("family"),
+        table.column("tuned"),
+        table.column("misfit"),
+        table.column("misfit_uncracked"),
     );
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let rows = table.rows();
     for name in ["in phase", "half period"] {
         assert!(
             rows.iter().any(|r| r[family] == name && r[tuned] == "true"),
@@ -212,17 +242,15 @@ fn tuned_trains_are_linear_without_the_crack(table: &std::path::Path) {
 /// along x falls slowly, the contact at GLL nodes), states an error within the factor
 /// 2 of the true one (measured 0.74-1.40).
 fn estimates_hold_against_the_reference(table: &std::path::Path) {
-    let text = std::fs::read_to_string(table).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let table = Table::read(table);
+    let text = &table.text;
     let (trace, verdict, ratio, in_time) = (
-        column("trace"),
-        column("verdict"),
-        column("estimate_vs_error"),
-        column("difference_at_half_the_step"),
+        table.column("trace"),
+        table.column("verdict"),
+        table.column("estimate_vs_error"),
+        table.column("difference_at_half_the_step"),
     );
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let rows = table.rows();
     assert_eq!(rows.len(), 4, "{text}");
     for row in rows {
         assert_eq!(row[verdict], "reliable", "{}: {text}", row[trace]);
@@ -249,11 +277,8 @@ fn estimates_hold_against_the_reference(table: &std::path::Path) {
 /// distance to each other, the truth known no better (the PI residual's and the asymmetry's,
 /// from their traces' errors, measured 4.4x and 5.3x the distance).
 fn nonlinear_errors_hold_against_the_reference(table: &std::path::Path) {
-    let text = std::fs::read_to_string(table).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let table = Table::read(table);
+    let (text, column, rows) = (&table.text, |name: &str| table.column(name), table.rows());
     assert_eq!(rows.len(), 4, "{text}");
     let number = |row: &[&str], name: &str| -> f64 { row[column(name)].parse().unwrap() };
     for row in &rows {
@@ -287,11 +312,8 @@ fn nonlinear_errors_hold_against_the_reference(table: &std::path::Path) {
 /// instantaneous Coulomb law (measured 2.9x, 2.3x and 5.5x at smoke; 1.6x, 3.0x and 1.6x at
 /// quick).
 fn the_friction_response_time_narrows_the_spread(table: &std::path::Path) {
-    let text = std::fs::read_to_string(table).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let table = Table::read(table);
+    let (text, column, rows) = (&table.text, |name: &str| table.column(name), table.rows());
     let spread = |law: &str, measure: &str| -> f64 {
         let values: Vec<f64> = rows
             .iter()
@@ -322,12 +344,11 @@ fn the_friction_response_time_narrows_the_spread(table: &std::path::Path) {
 /// PI residual and the asymmetry with bounds from their traces), at least its distance to
 /// the reference under the same law (measured 7.7x, 1.33x and 2.3x).
 fn estimates_hold_with_the_friction_response_time(table: &std::path::Path) {
-    let text = std::fs::read_to_string(table).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let lagged: Vec<Vec<&str>> = lines
-        .map(|l| l.split(',').collect::<Vec<_>>())
+    let table = Table::read(table);
+    let (text, column) = (&table.text, |name: &str| table.column(name));
+    let lagged: Vec<Vec<&str>> = table
+        .rows()
+        .into_iter()
         .filter(|r| r[column("law")] == "lag20ns")
         .collect();
     assert_eq!(lagged.len(), 3, "{text}");
