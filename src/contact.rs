@@ -22,6 +22,12 @@
 //!   s = mu lambda_N* where d lambda_N*/dt = (lambda_N - lambda_N*) / tau (the simplified
 //!   Prakash-Clifton law: Prakash and Clifton 1993; Cochard and Rice 2000), integrated exactly
 //!   over a step with lambda_N held: s <- e^(-dt/tau) s + (1 - e^(-dt/tau)) mu lambda_N.
+//!   A pair that opens keeps that strength, decaying over tau, as the regularised faults of
+//!   SEM2DPACK do (Ampuero's `bc_dynflt`: the shear strength is mu sigma* whether or not the
+//!   fault opens). Were an open pair's friction zero, a pair whose normal force just reaches
+//!   zero in a step, and one that just misses, would differ by the whole lagged strength: the
+//!   run would jump under an arbitrarily small change of its input. Under the instantaneous
+//!   law the strength vanishes with the normal force, and an open pair is free.
 //!   With the instantaneous law, node-to-node friction on the GLL nodes of spectral elements
 //!   of order 3 and above flutters: the pairs chatter open and shut and the mean friction
 //!   falls short of mu N. A tau of the P-wave travel time over the mean node spacing along
@@ -340,26 +346,31 @@ impl ContactSolver {
             let residual = p.gap(p.normal, u_next);
             self.report.max_penetration_m = self.report.max_penetration_m.max(residual);
             let g_t = p.gap(p.tangent, u_next);
-            if lambda_n <= 0.0 {
+            let touching = lambda_n > 0.0;
+            let strength = self.strength[k];
+            // An open pair keeps the lagged strength (zero under the instantaneous law), as
+            // SEM2DPACK's regularised faults do: the friction force then stays continuous as
+            // the normal force reaches zero (module doc).
+            if !touching && strength <= 0.0 {
                 self.stick_gap[k] = g_t;
                 self.force[k].tangential = 0.0;
                 continue;
             }
-            contact += 1;
+            contact += touching as u32;
             let d_t = p.d_tangent;
             if d_t <= 0.0 {
                 // both tangential DOFs are fixed: nothing can slip
-                stick += 1;
+                stick += touching as u32;
                 self.force[k].tangential = 0.0;
                 continue;
             }
             let trial = (g_t - self.stick_gap[k]) / d_t;
-            let strength = self.strength[k];
-            let lambda_t = if trial.abs() <= strength {
-                stick += 1;
+            let sticks = trial.abs() <= strength;
+            stick += (touching && sticks) as u32;
+            slip += (touching && !sticks) as u32;
+            let lambda_t = if sticks {
                 trial
             } else {
-                slip += 1;
                 trial.signum() * strength
             };
             p.push(p.tangent, lambda_t, u_next);
@@ -521,6 +532,38 @@ mod tests {
                 normal,
             }],
         }
+    }
+
+    /// The friction force of a pair whose normal force just reaches zero in a step and of
+    /// one that just misses are the same under a response time (the open pair keeps the
+    /// lagged strength), and zero for an open pair under the instantaneous law.
+    #[test]
+    fn friction_is_continuous_as_a_pair_opens() {
+        let compliance = [1.0; 4];
+        // u = (master x, master y, slave x, slave y); normal (0, 1), tangent (1, 0)
+        let tangential_force = |lag: f64, normal_gap: f64| {
+            let options = ContactOptions {
+                normal_stress_lag_s: lag,
+                ..Default::default()
+            };
+            let mut solver =
+                ContactSolver::new(&crack([0.0, 1.0]), &compliance, options, 2, 1.0).unwrap();
+            solver.reset_stick_points(&[0.0; 4]);
+            // pressed shut, no sliding: the strength builds up
+            solver.apply(&mut [0.0, 0.0, 0.0, 1.0]).unwrap();
+            // then pulled along t by 0.1, at the edge of contact
+            solver.apply(&mut [0.0, 0.0, 0.1, normal_gap]).unwrap();
+            solver.force[0].tangential
+        };
+        let lag = 1.0 / 2f64.ln(); // half the strength kept per step
+        let (shut, open) = (tangential_force(lag, 1e-12), tangential_force(lag, -1e-12));
+        // trial 0.1 / (D_m + D_s) = 0.05 below the strength 0.5 * 0.5 * 0.6 * 0.5 = 0.075
+        assert!(
+            (shut - 0.05).abs() < 1e-12 && (open - 0.05).abs() < 1e-12,
+            "{shut} {open}"
+        );
+        assert_eq!(tangential_force(0.0, -1e-12), 0.0);
+        assert!(tangential_force(0.0, 1e-12).abs() < 1e-12);
     }
 
     /// An inclined pair whose DOFs move differently along x and y (here the slave's x held)
