@@ -64,7 +64,8 @@ pub struct ContactOptions {
     /// Coulomb friction coefficient mu (report: 0.6).
     pub friction: f64,
     /// Response time tau (s) of the frictional strength to the normal force (simplified
-    /// Prakash-Clifton law, module doc); 0 (default): instantaneous, the report's Coulomb law.
+    /// Prakash-Clifton law, module doc; an open pair keeps the strength, fading over tau);
+    /// 0 (default): instantaneous, the report's Coulomb law.
     pub normal_stress_lag_s: f64,
 }
 

@@ -325,10 +325,8 @@ fn side_lobe_asymmetry(
         spec.window_s - spec.main_lobe_half_width_s,
         spec.window_s + spec.main_lobe_half_width_s,
     );
-    let focus_energy = f[0]
-        .focused
-        .window(focus_window.0, focus_window.1)?
-        .energy();
+    // in continuous time, as the side windows' energies are (`signal::side_lobes`)
+    let focus_energy = signal::window_energy(&f[0].focused, focus_window)?;
     let side_error = |window: (f64, f64), energy: f64| -> Result<Option<f64>> {
         let own = Estimate::waveform_of(focused, window, refinement)?.stated();
         let through_focus = focused_estimate
