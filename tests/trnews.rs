@@ -311,7 +311,7 @@ fn a_scan_is_tr_news_at_each_position() {
 /// The instantaneous Coulomb law makes the cracked focusing ill-conditioned on spectral
 /// elements; a friction response time does not. A change of 1e-6 of the friction coefficient
 /// moves the cracked smoke preset's focused signal y_TR by 37x that (relative L2 over the
-/// focus window) with the instantaneous law, and by 0.045x with the strength following the
+/// focus window) with the instantaneous law, and by 0.046x with the strength following the
 /// normal force over 20 ns (measured; the first-pass response moves by 0.06x and 0.03x; on
 /// the report's triangles, whose linear crack faces do not chatter, y_TR moves by 0.044x
 /// under either law). So under the instantaneous law any small change of the discretisation
