@@ -182,10 +182,6 @@ fn losses_weaken_the_focus(table: &std::path::Path) {
     }
 }
 
-/// `resonance.rhai` at smoke: trains of both families tuned to the gap's resonances are
-/// among the trains, every train's uncracked misfit is round-off (the linear prediction is
-/// exact while the last delay keeps the first copy's y_TR in the misfit window; measured
-/// 1.4e-15 to 3.9e-15) and its cracked misfit is not (measured 0.029 to 0.086).
 /// A CSV table a script wrote: its text (quoted in failure messages), its header's columns
 /// and its rows of cells.
 struct Table {
@@ -218,6 +214,19 @@ impl Table {
     }
 }
 
+/// The smallest and the largest of `values`.
+fn extent(values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        })
+}
+
+/// `resonance.rhai` at smoke: trains of both families tuned to the gap's resonances are
+/// among the trains, every train's uncracked misfit is round-off (the linear prediction is
+/// exact while the last delay keeps the first copy's y_TR in the misfit window; measured
+/// 1.4e-15 to 3.9e-15) and its cracked misfit is not (measured 0.029 to 0.086).
 fn tuned_trains_are_linear_without_the_crack(table: &std::path::Path) {
     let table = Table::read(table);
     let text = &table.text;
@@ -328,11 +337,7 @@ fn the_friction_response_time_narrows_the_spread(table: &std::path::Path) {
             .map(|r| r[column(measure)].parse().unwrap())
             .collect();
         assert_eq!(values.len(), 6, "{law}: {text}");
-        let (lo, hi) = values
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                (lo.min(v), hi.max(v))
-            });
+        let (lo, hi) = extent(&values);
         hi - lo
     };
     for measure in ["pi_residual", "side_lobe_asymmetry", "misfit"] {
@@ -387,11 +392,7 @@ fn the_friction_response_time_makes_the_focus_smooth(table: &std::path::Path) {
             .map(|r| r[column(trace)].parse().unwrap())
             .collect();
         assert_eq!(ratios.len(), 3, "{law}, {direction}: {text}");
-        let (lo, hi) = ratios
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                (lo.min(v), hi.max(v))
-            });
+        let (lo, hi) = extent(&ratios);
         hi / lo
     };
     let traces = [
@@ -432,8 +433,8 @@ fn at_smoke_the_contact_measures_move_more_along_x_than_in_time(table: &std::pat
         };
         let steps = value("step", "7");
         assert_eq!(steps.len(), 4, "{text}");
-        let in_time = steps.iter().fold(f64::NEG_INFINITY, |a, &v| a.max(v))
-            - steps.iter().fold(f64::INFINITY, |a, &v| a.min(v));
+        let (lo, hi) = extent(&steps);
+        let in_time = hi - lo;
         let along_x = (value("along_x", "10")[0] - value("along_x", "7")[0]).abs();
         assert!(
             in_time <= 0.5 * along_x,
