@@ -1,6 +1,6 @@
 //! The setup every experiment takes from its command line (`--set NAME=VALUE`), defined once:
-//! the resolution preset, the discretisation, the error estimate, a requested accuracy and
-//! whether the materials have losses.
+//! the resolution preset, the discretisation, the error estimate, a requested accuracy,
+//! whether the materials have losses and the crack's friction law.
 //! Each has one default here ([`Experiment::default`]); a script may state its own default
 //! for a study that is about something else (the triangles' convergence, say), never a second
 //! parser.
@@ -31,6 +31,44 @@ pub struct Experiment {
     /// ([`AttenuationSpec::report_materials`]); off by default, as in the report.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub losses: bool,
+    /// The crack's friction law.
+    #[serde(skip_serializing_if = "FrictionLaw::is_default")]
+    pub friction_law: FrictionLaw,
+}
+
+/// The friction law on the crack's faces.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrictionLaw {
+    /// The strength follows the normal force with the default response time
+    /// ([`crate::contact::DEFAULT_NORMAL_STRESS_LAG_S`]).
+    #[default]
+    Regularised,
+    /// The report's instantaneous Coulomb law.
+    Instantaneous,
+}
+
+impl FrictionLaw {
+    fn is_default(&self) -> bool {
+        *self == FrictionLaw::default()
+    }
+}
+
+impl std::str::FromStr for FrictionLaw {
+    type Err = Error;
+
+    fn from_str(text: &str) -> Result<FrictionLaw> {
+        match text.trim() {
+            "regularised" => Ok(FrictionLaw::Regularised),
+            "instantaneous" => Ok(FrictionLaw::Instantaneous),
+            _ => Err(Error::invalid(
+                "friction_law",
+                text,
+                "expected regularised (a 20 ns friction response time, the default) or \
+                 instantaneous (the report's Coulomb law)",
+            )),
+        }
+    }
 }
 
 impl Default for Experiment {
@@ -43,18 +81,20 @@ impl Default for Experiment {
             error_estimate: ErrorEstimate::Auto,
             tolerance: None,
             losses: false,
+            friction_law: FrictionLaw::Regularised,
         }
     }
 }
 
 impl Experiment {
     /// The names of the setup's parameters, as `--set` takes them.
-    pub const PARAMETERS: [&'static str; 5] = [
+    pub const PARAMETERS: [&'static str; 6] = [
         "resolution",
         "discretisation",
         "error_estimate",
         "tolerance",
         "losses",
+        "friction_law",
     ];
 
     /// Sets parameter `name` from the text the user wrote; an unknown name or a value the
@@ -66,6 +106,7 @@ impl Experiment {
             "error_estimate" => self.error_estimate = text.parse()?,
             "tolerance" => self.tolerance = Some(tolerance(text)?),
             "losses" => self.losses = switch("losses", text)?,
+            "friction_law" => self.friction_law = text.parse()?,
             other => {
                 return Err(Error::invalid(
                     "experiment parameter",
@@ -82,13 +123,20 @@ impl Experiment {
         TrNewsSpec::preset(self.resolution)
     }
 
-    /// The preset scene (cracked) on the chosen discretisation, with the losses when asked,
-    /// before any refinement for the tolerance.
+    /// The preset scene (cracked) on the chosen discretisation, with the losses and the
+    /// friction law asked for, before any refinement for the tolerance.
     pub fn scene_spec(&self) -> SceneSpec {
-        SceneSpec {
+        let mut spec = SceneSpec {
             attenuation: self.losses.then(AttenuationSpec::report_materials),
             ..SceneSpec::preset_on(self.resolution, self.discretisation)
+        };
+        if self.friction_law == FrictionLaw::Instantaneous {
+            let contact = spec.crack.as_mut().and_then(|c| c.contact.as_mut());
+            if let Some(contact) = contact {
+                contact.normal_stress_lag_s = 0.0;
+            }
         }
+        spec
     }
 
     /// The error estimate the runs get: always on when a tolerance is asked for, since the
@@ -143,6 +191,19 @@ mod tests {
         e.set("error_estimate", "false").unwrap();
         e.set("losses", "true").unwrap();
         assert!(e.scene_spec().attenuation.is_some());
+        let lag = |e: &Experiment| {
+            e.scene_spec()
+                .crack
+                .unwrap()
+                .contact
+                .unwrap()
+                .normal_stress_lag_s
+        };
+        assert_eq!(lag(&e), crate::contact::DEFAULT_NORMAL_STRESS_LAG_S);
+        e.set("friction_law", "instantaneous").unwrap();
+        assert_eq!(lag(&e), 0.0, "the report's law");
+        e.set("friction_law", "regularised").unwrap();
+        assert_eq!(lag(&e), crate::contact::DEFAULT_NORMAL_STRESS_LAG_S);
         assert_eq!(e.estimate(), ErrorEstimate::Off);
         e.set("tolerance", "0.05").unwrap();
         assert_eq!(e.tolerance, Some(0.05));
@@ -159,6 +220,7 @@ mod tests {
             ("tolerance", "1.5", "1.5"),
             ("tolerance", "NaN", "NaN"),
             ("losses", "yes", "yes"),
+            ("friction_law", "coulomb", "coulomb"),
             ("order", "7", "order"),
         ] {
             let message = e.set(name, text).unwrap_err().to_string();

@@ -77,6 +77,9 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         "sem_target.png",
         "sem_target_timing.csv",
         "sem_target_friction_lag.csv",
+        "sem_target_lag_compare.csv",
+        "sem_target_lag_estimate.csv",
+        "sem_target_lag_measures.csv",
         "sem_target_nonlinear.csv",
         "sem_target_friction_spread.csv",
         "sem_target_friction_spread_estimate.csv",
@@ -125,6 +128,11 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
     the_scan_locates_the_crack(&out.join("plots/scan_localisation.csv"));
     estimates_hold_against_the_reference(&out.join("plots/sem_target_estimate.csv"));
     nonlinear_errors_hold_against_the_reference(&out.join("plots/sem_target_nonlinear.csv"));
+    the_default_friction_law_converges_and_its_estimates_hold(
+        &out.join("plots/sem_target_lag_compare.csv"),
+        &out.join("plots/sem_target_lag_estimate.csv"),
+        &out.join("plots/sem_target_lag_measures.csv"),
+    );
     the_friction_response_time_narrows_the_spread(
         &out.join("plots/sem_target_friction_spread.csv"),
     );
@@ -282,6 +290,55 @@ fn estimates_hold_against_the_reference(table: &std::path::Path) {
             "{}: estimate / error = {r}",
             row[trace]
         );
+    }
+}
+
+/// The cracked traces under the default friction law, a 20 ns response time
+/// (`sem_target.rhai`'s piece `lag_compare`, smoke): both presets' discretisations are closer
+/// to the reference that shares nothing with them than under the report's instantaneous law,
+/// and the references closer to each other (measured 0.58%, 0.56%, 0.17%, 0.18% and 0.077%,
+/// 0.079%, against 0.86%, 1.11%, 0.41%, 0.31% and 0.18%, 0.20%: the law's chatter is gone);
+/// the smoke preset's estimate from its companions is "reliable" and within the issue's
+/// factor 2 of its distance on both cracked traces (measured 0.66 and 0.55); and the paper
+/// preset's cracked nonlinear measures are closer to their reference than the quick preset's
+/// (PI residual, asymmetry, misfit: measured 2.6e-4, 1.3e-3, 1.5e-4 against 7.0e-4, 4.6e-3,
+/// 7.2e-4).
+fn the_default_friction_law_converges_and_its_estimates_hold(
+    compare: &Path,
+    estimate: &Path,
+    measures: &Path,
+) {
+    let table = Table::read(compare);
+    let (text, rows) = (&table.text, table.rows());
+    assert_eq!(rows.len(), 6, "{text}");
+    let (lagged, instantaneous) = (
+        table.column("error_vs_reference_lag20ns"),
+        table.column("error_vs_reference_instantaneous"),
+    );
+    for row in &rows {
+        let (lag, inst): (f64, f64) = (
+            row[lagged].parse().unwrap(),
+            row[instantaneous].parse().unwrap(),
+        );
+        assert!(lag > 0.0 && lag < inst, "{row:?}: {text}");
+    }
+    let table = Table::read(estimate);
+    let (text, rows) = (&table.text, table.rows());
+    assert_eq!(rows.len(), 2, "{text}");
+    let (verdict, ratio) = (table.column("verdict"), table.column("estimate_vs_error"));
+    for row in &rows {
+        assert_eq!(row[verdict], "reliable", "{text}");
+        let r: f64 = row[ratio].parse().unwrap();
+        assert!((0.5..=2.0).contains(&r), "estimate / error = {r}: {text}");
+    }
+    let table = Table::read(measures);
+    let (text, rows) = (&table.text, table.rows());
+    assert_eq!(rows.len(), 6, "{text}");
+    let distance = table.column("distance");
+    let (quick, paper) = rows.split_at(3);
+    for (q, p) in quick.iter().zip(paper) {
+        let (dq, dp): (f64, f64) = (q[distance].parse().unwrap(), p[distance].parse().unwrap());
+        assert!(dp < dq, "{q:?} {p:?}: {text}");
     }
 }
 
@@ -481,9 +538,11 @@ fn error_estimate_on_fills_the_estimate_columns() {
             !rows.is_empty() && rows.iter().all(|r| !r.contains(",off")),
             "{table}: {text}"
         );
+        // a verdict of the companions' (under the default friction law every cracked PI
+        // residual at smoke is a bound)
+        let verdicts = ["reliable", "upper_bound", "propagated_bound", "refine"];
         assert!(
-            rows.iter()
-                .any(|r| r.contains("reliable") || r.contains("refine")),
+            rows.iter().any(|r| verdicts.iter().any(|v| r.contains(v))),
             "{table}: {text}"
         );
     }

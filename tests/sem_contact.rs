@@ -23,11 +23,13 @@ use trnews::solve::{
     run_on, Discretisation, Integrator, Quantity, Receiver, RunConfig, RunOutput, Source,
 };
 
+/// The exact multiplier with the report's instantaneous Coulomb law, whose results the
+/// analytic solutions here are.
 fn exact(friction: f64) -> Option<ContactOptions> {
     Some(ContactOptions {
         method: ContactMethod::Exact,
         friction,
-        ..Default::default()
+        normal_stress_lag_s: 0.0,
     })
 }
 

@@ -56,7 +56,7 @@ mod experiment_api {
 
     type Res<T> = Result<T, Box<rhai::EvalAltResult>>;
 
-    /// The experiment's setup from `--set`: resolution = quick (default) | paper | smoke; discretisation = sem (default) | t3; error_estimate = auto (default: on where the companions cost at most 30% extra) | true | false; tolerance = a relative error of the first-pass responses (triangles' element sizes refined to meet it; turns the estimate on to check it); losses = false (default, as in the report) | true (the literature's quality factors of the plies and the epoxy; central differences or Newmark, not the fourth-order step). A bad value is an error naming the parameter and the value.
+    /// The experiment's setup from `--set`: resolution = quick (default) | paper | smoke; discretisation = sem (default) | t3; error_estimate = auto (default: on where the companions cost at most 30% extra) | true | false; tolerance = a relative error of the first-pass responses (triangles' element sizes refined to meet it; turns the estimate on to check it); losses = false (default, as in the report) | true (the literature's quality factors of the plies and the epoxy; central differences or Newmark, not the fourth-order step); friction_law = regularised (default: the crack's friction strength follows the normal force with a 20 ns response time) | instantaneous (the report's Coulomb law, ill-conditioned on spectral elements). A bad value is an error naming the parameter and the value.
     #[rhai_fn(return_raw)]
     pub fn setup(ctx: NativeCallContext) -> Res<Experiment> {
         read_setup(&ctx, Map::new())
@@ -121,7 +121,13 @@ mod experiment_api {
     pub fn scene_with(ctx: NativeCallContext, e: &mut Experiment, overrides: Map) -> Res<SceneRef> {
         uses(
             &ctx,
-            &["resolution", "discretisation", "tolerance", "losses"],
+            &[
+                "resolution",
+                "discretisation",
+                "tolerance",
+                "losses",
+                "friction_law",
+            ],
         )?;
         let scene = crate::script::scene::build(&ctx, overrides, e.scene_spec())?;
         match e.tolerance {
