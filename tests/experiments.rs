@@ -80,6 +80,7 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         "sem_target_lag_compare.csv",
         "sem_target_lag_estimate.csv",
         "sem_target_lag_measures.csv",
+        "sem_target_lag_shift.csv",
         "sem_target_nonlinear.csv",
         "sem_target_friction_spread.csv",
         "sem_target_friction_spread_estimate.csv",
@@ -132,6 +133,9 @@ fn experiment_scripts_run_at_smoke_resolution_and_write_their_outputs() {
         &out.join("plots/sem_target_lag_compare.csv"),
         &out.join("plots/sem_target_lag_estimate.csv"),
         &out.join("plots/sem_target_lag_measures.csv"),
+    );
+    the_spectral_shifts_estimate_holds_under_the_default_law(
+        &out.join("plots/sem_target_lag_shift.csv"),
     );
     the_friction_response_time_narrows_the_spread(
         &out.join("plots/sem_target_friction_spread.csv"),
@@ -310,8 +314,9 @@ fn the_default_friction_law_converges_and_its_estimates_hold(
 ) {
     let table = Table::read(compare);
     let (text, rows) = (&table.text, table.rows());
-    assert_eq!(rows.len(), 6, "{text}");
-    let (lagged, instantaneous) = (
+    assert_eq!(rows.len(), 8, "{text}");
+    let (run, lagged, instantaneous) = (
+        table.column("run"),
         table.column("error_vs_reference_lag20ns"),
         table.column("error_vs_reference_instantaneous"),
     );
@@ -320,7 +325,9 @@ fn the_default_friction_law_converges_and_its_estimates_hold(
             row[lagged].parse().unwrap(),
             row[instantaneous].parse().unwrap(),
         );
-        assert!(lag > 0.0 && lag < inst, "{row:?}: {text}");
+        // the triangles' faces do not chatter: their error is their mesh's under either law
+        let chatters = !row[run].starts_with("t3");
+        assert!(lag > 0.0 && (lag < inst || !chatters), "{row:?}: {text}");
     }
     let table = Table::read(estimate);
     let (text, rows) = (&table.text, table.rows());
@@ -340,6 +347,31 @@ fn the_default_friction_law_converges_and_its_estimates_hold(
         let (dq, dp): (f64, f64) = (q[distance].parse().unwrap(), p[distance].parse().unwrap());
         assert!(dp < dq, "{q:?} {p:?}: {text}");
     }
+}
+
+/// The crack's spectral shift under the default friction law (`sem_target.rhai`'s piece
+/// `lag_compare`, smoke; the references' uncracked scenes rerun beside their cracked ones):
+/// the smoke preset's estimate from its companions states an error within the issue's
+/// factor 2 of its distance to the reference that shares nothing with it (measured 0.66:
+/// 507 Hz against 767 Hz, the references 36 Hz apart), and the paper preset's discretisation
+/// is closer (302 Hz).
+fn the_spectral_shifts_estimate_holds_under_the_default_law(table: &Path) {
+    let table = Table::read(table);
+    let (text, rows) = (&table.text, table.rows());
+    assert_eq!(rows.len(), 2, "{text}");
+    let (verdict, ratio, distance) = (
+        table.column("verdict"),
+        table.column("stated_vs_distance"),
+        table.column("distance"),
+    );
+    assert_eq!(rows[0][verdict], "reliable", "{text}");
+    let r: f64 = rows[0][ratio].parse().unwrap();
+    assert!((0.5..=2.0).contains(&r), "stated / distance = {r}: {text}");
+    let (quick, paper): (f64, f64) = (
+        rows[0][distance].parse().unwrap(),
+        rows[1][distance].parse().unwrap(),
+    );
+    assert!(paper < quick, "{text}");
 }
 
 /// The nonlinear measures' stated errors on the smoke preset (the PI residual, the side-lobe

@@ -433,6 +433,12 @@ mod signal_api {
 
     // ------------------------------------------------------------ spectra
 
+    /// The mean frequency sum f P(f) / sum P(f) of the signal's Welch spectrum (Hann segments of a quarter of the trace, half overlapping, no detrend; Hz): the measure of the crack's spectral shift that trnews scans take (a scan's spectral_shifts is the cracked first-pass response's less the uncracked one's).
+    #[rhai_fn(global, pure, return_raw)]
+    pub fn mean_frequency_hz(ctx: NativeCallContext, s: &mut Signal) -> Res<FLOAT> {
+        crate::trnews::mean_frequency_hz(s).at(&ctx)
+    }
+
     /// Hann-windowed periodogram of the whole signal.
     #[rhai_fn(global, pure, return_raw)]
     pub fn periodogram(ctx: NativeCallContext, s: &mut Signal) -> Res<Spectrum> {
