@@ -133,6 +133,7 @@ fn sem_estimate_and_truth(
         Refinement::Orders {
             top: order,
             across: true,
+            smooth: true,
         },
         exact,
     )

@@ -280,9 +280,25 @@ fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
         spec.refinement(),
         Refinement::Orders {
             top: 7,
-            across: true
+            across: true,
+            smooth: true
         }
     );
+    // the report's instantaneous Coulomb law amplifies every change of the discretisation
+    let mut instantaneous = spec.clone();
+    let crack = instantaneous.crack.as_mut().unwrap();
+    crack.contact.as_mut().unwrap().normal_stress_lag_s = 0.0;
+    assert!(matches!(
+        instantaneous.refinement(),
+        Refinement::Orders { smooth: false, .. }
+    ));
+    // frictionless faces have no Coulomb law to chatter
+    let crack = instantaneous.crack.as_mut().unwrap();
+    crack.contact.as_mut().unwrap().friction = 0.0;
+    assert!(matches!(
+        instantaneous.refinement(),
+        Refinement::Orders { smooth: true, .. }
+    ));
     let dt = 3.1e-9;
     let companions = spec.companions(dt).unwrap();
     let orders: Vec<DiscretisationSpec> = companions

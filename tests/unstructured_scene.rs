@@ -291,7 +291,8 @@ fn error_estimates_on_a_gmsh_mesh_hold_against_a_layered_reference() {
         spec.refinement(),
         Refinement::Orders {
             top: order,
-            across: false
+            across: false,
+            smooth: true
         }
     );
     let main = Scene::build(&spec).unwrap();

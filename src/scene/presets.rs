@@ -316,16 +316,25 @@ impl SceneSpec {
 
     /// How [`SceneSpec::companions`] refine this scene (on the layered rectangle along x, the
     /// companion across the layers the third; on a Gmsh mesh of quadrilaterals the order in
-    /// both directions).
+    /// both directions), and whether its results depend smoothly on the discretisation (not
+    /// with a crack whose faces follow the instantaneous Coulomb law with friction).
     pub fn refinement(&self) -> Refinement {
+        let smooth = self
+            .contact()
+            .is_none_or(|c| c.friction == 0.0 || c.normal_stress_lag_s > 0.0);
         if let Some(top) = self.gmsh.as_ref().and_then(|g| g.order) {
-            return Refinement::Orders { top, across: false };
+            return Refinement::Orders {
+                top,
+                across: false,
+                smooth,
+            };
         }
         match self.discretisation {
             DiscretisationSpec::T3 => Refinement::ElementSizes,
             DiscretisationSpec::Sem { order_x, .. } => Refinement::Orders {
                 top: order_x,
                 across: true,
+                smooth,
             },
         }
     }
