@@ -823,9 +823,10 @@ fn fitted_tail(d1: f64, d2: f64, d13: Option<f64>, refinement: Refinement) -> Op
 /// scene: each order puts the crack faces' nodes elsewhere, so each order's contact error is
 /// another perturbation of about the same size (the inverted focusing drive's trace at
 /// quick: d_1 = 0.55%, d_2 = 0.57%; the cracked PI residual at quick under the default
-/// friction law: 0.14694, 0.14627, 0.14637 at orders 7, 6, 5, c = 0.43). Model: errors of one size a, consecutive ones correlating c (E_p and
-/// E_p-2: c^2), so that d_1^2 = d_2^2 = 2 a^2 (1 - c) and d_13^2 = 2 a^2 (1 - c^2); with
-/// dbar^2 = (d_1^2 + d_2^2) / 2, c = (d_13 / dbar)^2 - 1 and a = dbar / sqrt(2 (1 - c)).
+/// friction law: 0.14694, 0.14627, 0.14637 at orders 7, 6, 5, c = 0.43). Model: errors of
+/// one size a, consecutive ones correlating c (E_p and E_p-2: c^2), so that d_1^2 = d_2^2 =
+/// 2 a^2 (1 - c) and d_13^2 = 2 a^2 (1 - c^2); with dbar^2 = (d_1^2 + d_2^2) / 2,
+/// c = (d_13 / dbar)^2 - 1 and a = dbar / sqrt(2 (1 - c)).
 /// Taken where c <= 1/2: the errors mostly independent, a at most dbar. Errors that are
 /// more aligned and do not fall are a slow convergence of unknown extent (aligned errors
 /// falling 10% per order give c = 3): `None`, "refine".
