@@ -213,6 +213,30 @@ fn cracked_sweep_is_bit_identical_for_any_thread_count() {
 }
 
 #[test]
+fn estimated_focus_is_bit_identical_for_any_thread_count() {
+    // The companions of the error estimate run beside the main runs; the estimates they give
+    // (their scatter and tail fits included) must not change with the thread count either.
+    let scene = small(true);
+    let focus = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let r = Responder::simulating(scene.clone());
+            let (companions, _) = r.companion_scenes().unwrap();
+            // a simulating responder runs every drive whole: no impulse response, no duration
+            let r = r.with_companions(companions, 0.0).unwrap();
+            let f = tr_news(&r, &spec()).unwrap().focus.remove(0);
+            let bits: Vec<u64> = f.focused.samples.iter().map(|v| v.to_bits()).collect();
+            // Debug prints every f64 to the shortest text that reads back to its bits
+            (bits, format!("{:?}", f.estimates.expect("companions give estimates")))
+        })
+    };
+    assert_eq!(focus(1), focus(2));
+}
+
+#[test]
 fn time_and_memory_limits_hold_on_the_workers_of_a_parallel_pass_and_delayed_sweep() {
     use std::time::Duration;
     use trnews::budget::{self, Stop};
