@@ -446,21 +446,40 @@ fn the_friction_response_time_narrows_the_spread(table: &std::path::Path) {
 /// distance to the reference under the same law (measured 0.85, 0.51 and 0.72: below the
 /// truth, since the contact's error along x falls slowly from order 7 on, which companions
 /// at orders 6 and 5 do not see;
-/// [`at_smoke_the_contact_measures_move_more_along_x_than_in_time`]).
+/// [`at_smoke_the_contact_measures_move_more_along_x_than_in_time`]). The paper preset's
+/// companions state an estimate or an upper bound on each, within 1/2.5 to 3 of its distance
+/// to the reference that shares nothing with it (measured 1.02 and 2.45 as bounds on the PI
+/// residual and the misfit, 1.51 on the asymmetry).
 fn estimates_hold_with_the_friction_response_time(table: &std::path::Path) {
     let table = Table::read(table);
     let (text, column) = (&table.text, |name: &str| table.column(name));
-    let lagged: Vec<Vec<&str>> = table
-        .rows()
-        .into_iter()
-        .filter(|r| r[column("law")] == "lag20ns")
-        .collect();
-    assert_eq!(lagged.len(), 3, "{text}");
-    for row in &lagged {
-        assert_eq!(row[column("verdict")], "reliable", "{text}");
+    let lagged = |run: &str| -> Vec<Vec<&str>> {
+        table
+            .rows()
+            .into_iter()
+            .filter(|r| r[column("run")] == run && r[column("law")] == "lag20ns")
+            .collect()
+    };
+    let ratio = |row: &[&str]| -> f64 {
         let number = |name: &str| -> f64 { row[column(name)].parse().unwrap() };
-        let ratio = number("stated_error") / number("error_vs_reference");
-        assert!((1.0 / 2.5..=2.5).contains(&ratio), "{ratio}: {text}");
+        number("stated_error") / number("error_vs_reference")
+    };
+    let quick = lagged("sem7_0.5mm_across2-4");
+    assert_eq!(quick.len(), 3, "{text}");
+    for row in &quick {
+        assert_eq!(row[column("verdict")], "reliable", "{text}");
+        let r = ratio(row);
+        assert!((1.0 / 2.5..=2.5).contains(&r), "{r}: {text}");
+    }
+    let paper = lagged("sem6_0.25mm_across3-6");
+    assert_eq!(paper.len(), 3, "{text}");
+    for row in &paper {
+        assert!(
+            ["reliable", "upper_bound"].contains(&row[column("verdict")]),
+            "{text}"
+        );
+        let r = ratio(row);
+        assert!((1.0 / 2.5..=3.0).contains(&r), "{r}: {text}");
     }
 }
 
