@@ -230,7 +230,10 @@ fn estimated_focus_is_bit_identical_for_any_thread_count() {
             let f = tr_news(&r, &spec()).unwrap().focus.remove(0);
             let bits: Vec<u64> = f.focused.samples.iter().map(|v| v.to_bits()).collect();
             // Debug prints every f64 to the shortest text that reads back to its bits
-            (bits, format!("{:?}", f.estimates.expect("companions give estimates")))
+            (
+                bits,
+                format!("{:?}", f.estimates.expect("companions give estimates")),
+            )
         })
     };
     assert_eq!(focus(1), focus(2));
