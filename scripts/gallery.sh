@@ -1,14 +1,17 @@
 #!/usr/bin/env bash
-# Rebuilds the committed gallery: every figure and table under plots/ that the book shows,
-# on the default (quick) scene, with error estimates where the experiment has them. About an
-# hour on 2 cores. Other runs write under out/ (git-ignored); this one writes into the
+# Rebuilds the committed gallery: the figures and tables under plots/ that
+# docs/src/figures.md shows, and the L-bracket's (docs/src/guide/meshes.md), on the default
+# (quick) scene, with error estimates where the experiment has them. About 2 hours on 2
+# cores. Other runs write under out/ (git-ignored); this one writes into the
 # checkout (`--out .`), so `git diff plots/` shows what changed.
 #
 #   scripts/gallery.sh            # every figure
 #   scripts/gallery.sh spectra    # only the scripts named (file stems)
 #
-# The accuracy study behind the presets (scripts/sem_target.rhai) is not part of it: it runs
-# for hours, in pieces (see docs/src/validation/default-experiment.md).
+# Not part of it, each for hours: the accuracy study behind the presets
+# (scripts/sem_target.rhai, in pieces: docs/src/validation/default-experiment.md), the scans
+# and the resonance-tuned trains (docs/src/guide/scan.md), and the experiments rerun with
+# losses (docs/src/figures.md, "Which findings survive realistic losses").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --quiet
@@ -20,8 +23,10 @@ declare -A args=(
     [convergence]=""
     [work_precision]=""
     [stability]=""
+    [losses]=""
+    [bracket]=""
 )
-order=(sweep_delays trnews_focus pulse_inversion spectra convergence work_precision stability)
+order=(sweep_delays trnews_focus pulse_inversion spectra convergence work_precision stability losses bracket)
 chosen=("${@:-${order[@]}}")
 for name in "${chosen[@]}"; do
     if [[ -z "${args[$name]+set}" ]]; then
