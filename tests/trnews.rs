@@ -173,6 +173,15 @@ fn pulse_inversion_cancels_only_without_a_closing_crack() {
     assert!(residual(&pi) > 1e-3, "{:e}", residual(&pi));
 }
 
+/// `f` run on a pool of its own with `threads` workers.
+fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
 #[test]
 fn cracked_sweep_is_bit_identical_for_any_thread_count() {
     // Independent simulations run in parallel, and each run's kernel is parallel too; every
@@ -180,11 +189,7 @@ fn cracked_sweep_is_bit_identical_for_any_thread_count() {
     // change a bit of the result.
     let scene = small(true);
     let sweep = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        on_threads(threads, || {
             let r = Responder::simulating(scene.clone());
             let spec = TrNewsSpec {
                 receivers: vec![3],
@@ -218,11 +223,7 @@ fn estimated_focus_is_bit_identical_for_any_thread_count() {
     // (their scatter and tail fits included) must not change with the thread count either.
     let scene = small(true);
     let focus = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        on_threads(threads, || {
             let r = Responder::simulating(scene.clone());
             let (companions, _) = r.companion_scenes().unwrap();
             // a simulating responder runs every drive whole: no impulse response, no duration
