@@ -38,7 +38,8 @@ fn written_files_read_back_as_arrays_and_signals() {
         io::write_npy("a.npy", s);
         io::write_npy("m.npy", [[1.0, 2.0], [3.0, 4.0], [5.0, 6.0]]);
         io::write_csv("c.csv", ["t_s", "u"], [[0.0, 1e-8, 2e-8, 3e-8], s]);
-        io::write_json("j.json", #{ name: "probe", values: [1, 2.5], nested: #{ ok: true } });
+        // the last value's nearest neighbours are one bit away: read back, it must be itself
+        io::write_json("j.json", #{ name: "probe", values: [1, 2.5, 0.10920210679944317], nested: #{ ok: true } });
 
         let a = io::read_npy("a.npy");
         assert(type_of(a) == "array" && a.len() == 4 && a[1] == -1.25, `npy 1-D ${a}`);
@@ -58,6 +59,7 @@ fn written_files_read_back_as_arrays_and_signals() {
 
         let j = io::read_json("j.json");
         assert(j.name == "probe" && j.values[1] == 2.5 && j.nested.ok, `json ${j}`);
+        assert(j.values[2] == 0.10920210679944317, `json float ${j.values[2]}`);
         "#,
     )
     .expect("round trip");
