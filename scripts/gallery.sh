@@ -10,8 +10,9 @@
 #
 # Not part of it, each for hours: the accuracy study behind the presets
 # (scripts/sem_target.rhai, in pieces: docs/src/validation/default-experiment.md), the scans
-# and the resonance-tuned trains (docs/src/guide/scan.md), and the experiments rerun with
-# losses (docs/src/figures.md, "Which findings survive realistic losses").
+# (scripts/scans.sh) and the resonance-tuned trains (docs/src/guide/scan.md), and the
+# experiments rerun with losses (docs/src/figures.md, "Which findings survive realistic
+# losses").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --quiet
