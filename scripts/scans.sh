@@ -76,13 +76,17 @@ sides() {
 }
 
 if (($#)); then chosen=("$@"); else chosen=("${order[@]}" sides); fi
+# Every name is checked before any scan runs: a misspelt last name must not wait for hours.
+for name in "${chosen[@]}"; do
+    if [[ "$name" != sides && -z "${args[$name]+set}" ]]; then
+        echo "scans: no scan '$name' (one of: ${order[*]} sides)" >&2
+        exit 2
+    fi
+done
 for name in "${chosen[@]}"; do
     if [[ "$name" == sides ]]; then
         for n in "${!mirror[@]}"; do sides "$n"; done
-    elif [[ -n "${args[$name]+set}" ]]; then
-        scan "$name"
     else
-        echo "scans: no scan '$name' (one of: ${order[*]} sides)" >&2
-        exit 2
+        scan "$name"
     fi
 done
