@@ -2,8 +2,9 @@
 # Remakes the committed scans of docs/src/guide/scan.md: each placement's scan (its maps and
 # localisation, plots/scan_RES_NAME*.csv), then the crack located from both sides from each
 # mirror pair (plots/scan_sides_quick_NAME.{csv,png}). Each scan runs in out/scans/NAME, its
-# positions stored there as they finish, so a scan cut short resumes where it stopped. About
-# 3.5 hours on 2 cores for every quick scan; the smoke ones take minutes.
+# positions stored there as they finish, so a scan cut short resumes where it stopped. On
+# the 2-core AMD EPYC machine a 41-position quick scan took 34-49 min (2026-12-02), a
+# 21-position one 13-16 min (2026-11-27); the smoke ones take minutes.
 #
 #   scripts/scans.sh                 # every scan, then every both-sides table
 #   scripts/scans.sh x5 x11          # only the scans named
@@ -55,14 +56,20 @@ table() {
     esac
 }
 
+# Copies $1 to $2 whole: into a temporary name beside $2, then renamed over it.
+copy_whole() {
+    cp "$1" "$2.tmp.$$"
+    mv -f "$2.tmp.$$" "$2"
+}
+
 scan() {
     local name=$1 dir="out/scans/$1" to
     to=$(table "$name")
     # shellcheck disable=SC2086 # the arguments are words
     target/release/trnews-script scripts/scan.rhai --out "$dir" --data "$dir" ${args[$name]}
-    cp "$dir/plots/scan.csv" "plots/$to.csv"
-    cp "$dir/plots/scan_localisation.csv" "plots/${to}_localisation.csv"
-    case "$name" in default | smoke) cp "$dir/plots/scan.png" "plots/$to.png" ;; esac
+    copy_whole "$dir/plots/scan.csv" "plots/$to.csv"
+    copy_whole "$dir/plots/scan_localisation.csv" "plots/${to}_localisation.csv"
+    case "$name" in default | smoke) copy_whole "$dir/plots/scan.png" "plots/$to.png" ;; esac
 }
 
 sides() {
