@@ -51,6 +51,7 @@ fn main() {
             rule_order_x: None,
             element_size_x_m: h,
             element_size_y_m: h,
+            fine_x: None,
         };
         let m = SemModel::layered(&lam, WIDTH_M, &spec).expect("sem");
         for threads in [1, 2] {

@@ -33,6 +33,7 @@ fn build(
         rule_order_x: None,
         element_size_x_m: hx,
         element_size_y_m: row_m,
+        fine_x: None,
     };
     let m = SemModel::layered(lam, WIDTH, &cut).expect("sem");
     if per_layer {

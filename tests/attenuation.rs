@@ -76,6 +76,7 @@ fn strip(order: usize, attenuation: Option<AttenuationSpec>) -> SceneSpec {
             max_order_y: order,
             extra_order_y: 0,
             rule_order_x: None,
+            fine_x: None,
         },
         attenuation,
         ..common::plane_wave_scene()
@@ -218,6 +219,7 @@ fn roller_box(order: usize) -> SceneSpec {
             max_order_y: order,
             extra_order_y: 0,
             rule_order_x: None,
+            fine_x: None,
         },
         attenuation: Some(quality),
         ..Default::default()

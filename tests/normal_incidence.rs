@@ -290,6 +290,7 @@ fn sem_preset_with_floor(resolution: Resolution, min_order_y: usize) -> WaveStri
         rule_order_x: None,
         element_size_x_m: p.element_size_x_m,
         element_size_y_m: p.element_size_y_m,
+        fine_x: None,
     };
     sem(SemModel::layered(&stack(), p.element_size_x_m, &cut).unwrap())
 }
@@ -366,6 +367,7 @@ fn resolved() -> WaveStrip {
         rule_order_x: None,
         element_size_x_m: 0.5e-3,
         element_size_y_m: 1.0,
+        fine_x: None,
     };
     let m = SemModel::layered(&stack(), 0.5e-3, &one_row_per_layer).unwrap();
     sem(recut(&m, |_, h, _| ((h / 0.1e-3).ceil() as usize, 4)))

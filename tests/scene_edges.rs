@@ -246,6 +246,7 @@ fn sem_errors(order: usize, dt: f64, time_dispersion: Option<TimeDispersionSpec>
             max_order_y: order,
             extra_order_y: 0,
             rule_order_x: None,
+            fine_x: None,
         },
         ..spec(H0, EdgeCondition::Roller)
     };

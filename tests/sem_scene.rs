@@ -10,6 +10,7 @@ use trnews::scene::{
     Body, DiscretisationSpec, EdgeCondition, EdgeConditions, GmshSpec, Scene, SceneSpec,
     TimeDispersionSpec,
 };
+use trnews::sem::FineColumns;
 use trnews::signal::{relative_l2, Signal};
 use trnews::solve::RunConfig;
 use trnews::trnews::{Responder, TrNewsSpec};
@@ -21,6 +22,7 @@ fn sem(order: usize) -> DiscretisationSpec {
         max_order_y: order,
         extra_order_y: 0,
         rule_order_x: None,
+        fine_x: None,
     }
 }
 
@@ -106,6 +108,107 @@ fn a_sem_scene_builds_its_nodes_crack_loads_and_receivers() {
     assert!(
         st.dt_crit_s >= st.dt_element_bound_s && st.dt_element_bound_s > 0.0,
         "{st:?}"
+    );
+}
+
+/// `spec` on order-4 spectral elements with the band `fine_x` of narrower columns.
+fn with_fine_band(spec: &SceneSpec, from_m: f64, to_m: f64, element_size_m: f64) -> SceneSpec {
+    let DiscretisationSpec::Sem {
+        order_x,
+        min_order_y,
+        max_order_y,
+        extra_order_y,
+        rule_order_x,
+        ..
+    } = spec.discretisation
+    else {
+        panic!("a T3 scene");
+    };
+    SceneSpec {
+        discretisation: DiscretisationSpec::Sem {
+            order_x,
+            min_order_y,
+            max_order_y,
+            extra_order_y,
+            rule_order_x,
+            fine_x: Some(FineColumns {
+                from_m,
+                to_m,
+                element_size_m,
+            }),
+        },
+        ..spec.clone()
+    }
+}
+
+/// A band of fine columns around the crack (`discretisation.fine_x`): columns of at most its
+/// size from its left to its right edge (both column lines), the scene's elsewhere; the crack
+/// keeps its tips and gets one node pair per GLL interval of the band's columns it spans (4x
+/// as many at a quarter of the width), every row keeps its order across (the band refines
+/// along x alone), the step shrinks with the narrowest column (about 4x here), and a
+/// coarsened scene (a tolerance's pilots) scales the band with the elements.
+/// A band outside the width, empty, or of a size that is not a positive length, and a band
+/// whose columns would not fit in memory, are errors naming the field.
+#[test]
+fn a_band_of_fine_columns_refines_the_crack_and_sets_the_step() {
+    // tips on element column lines (of 0.25 mm), so that the band's columns keep them
+    let mut coarse = smoke_sem();
+    let crack = coarse.crack.as_mut().unwrap();
+    (crack.x_center_m, crack.length_m) = (Some(3e-3), 1e-3);
+    let a = Scene::build(&coarse).unwrap();
+    let pa = a.crack_placement.as_ref().unwrap();
+    let (from, to) = (pa.x0_used_m - 0.5e-3, pa.x1_used_m + 0.5e-3);
+    let fine = with_fine_band(&coarse, from, to, 0.0625e-3);
+    let b = Scene::build(&fine).unwrap();
+    let (Body::Sem { model: uniform, .. }, Body::Sem { model, .. }) = (&a.body, &b.body) else {
+        panic!("a T3 body for discretisation sem");
+    };
+    assert_eq!(model.row_orders(), uniform.row_orders());
+    for x in [from, to] {
+        assert!(
+            model.columns_m.iter().any(|&l| (l - x).abs() < 1e-12),
+            "band edge {x}"
+        );
+    }
+    for w in model.columns_m.windows(2) {
+        let inside = w[0] >= from - 1e-12 && w[1] <= to + 1e-12;
+        let most = if inside { 0.0625e-3 } else { 0.25e-3 };
+        assert!(w[1] - w[0] <= most * (1.0 + 1e-9), "{w:?}");
+    }
+    let pb = b.crack_placement.as_ref().unwrap();
+    assert_eq!((pa.x0_used_m, pa.x1_used_m), (pb.x0_used_m, pb.x1_used_m));
+    let pairs = |s: &Scene| s.crack().unwrap().pairs.len();
+    assert_eq!(
+        pairs(&b) + 1,
+        4 * (pairs(&a) + 1),
+        "{} vs {}",
+        pairs(&b),
+        pairs(&a)
+    );
+    let ratio = a.stability.dt_crit_s / b.stability.dt_crit_s;
+    assert!((3.0..5.0).contains(&ratio), "dt_crit ratio {ratio}");
+    let DiscretisationSpec::Sem {
+        fine_x: Some(band), ..
+    } = fine.coarsened(2.0).unwrap().discretisation
+    else {
+        panic!("the coarsened scene lost its band");
+    };
+    assert_eq!(band.element_size_m, 0.125e-3);
+    let width = coarse.width_m;
+    for (from_m, to_m, size, field) in [
+        (-1e-3, to, 0.0625e-3, "discretisation.fine_x.from_m"),
+        (from, width + 1e-3, 0.0625e-3, "discretisation.fine_x.to_m"),
+        (to, from, 0.0625e-3, "discretisation.fine_x.to_m"),
+        (from, to, 0.0, "discretisation.fine_x.element_size_m"),
+        (from, to, f64::NAN, "discretisation.fine_x.element_size_m"),
+    ] {
+        let e = error_of(&with_fine_band(&coarse, from_m, to_m, size));
+        assert!(e.contains(field), "{field}: {e}");
+    }
+    let e = error_of(&with_fine_band(&coarse, from, to, 1e-15));
+    assert!(
+        e.contains("discretisation.fine_x.element_size_m = ") && e.contains("memory"),
+        "{e}"
     );
 }
 
@@ -228,6 +331,7 @@ fn bad_sem_scenes_are_errors_naming_the_field() {
                 max_order_y,
                 extra_order_y: 0,
                 rule_order_x: None,
+                fine_x: None,
             },
             ..smoke_sem()
         };
@@ -336,6 +440,7 @@ fn sem_companions_lower_the_order_along_x_and_raise_it_across() {
                     max_order_y: 4,
                     extra_order_y,
                     rule_order_x,
+                    fine_x: None,
                 },
             )
             .into();

@@ -56,6 +56,7 @@ fn layered(order: usize) -> SceneSpec {
             max_order_y: order,
             extra_order_y: 0,
             rule_order_x: None,
+            fine_x: None,
         },
         ..around()
     }

@@ -128,13 +128,18 @@ fn layer_at(interfaces: &[f64], y: f64) -> usize {
 /// number, not one more.
 const COUNT_TOLERANCE: f64 = 1e-9;
 
+/// How many pieces no longer than `h` [`subdivide`] cuts [a, b] into (as a float, so that
+/// a memory check can count them before anything is allocated).
+pub(crate) fn piece_count(a: f64, b: f64, h: f64) -> f64 {
+    ((b - a) / h * (1.0 - COUNT_TOLERANCE)).ceil().max(1.0)
+}
+
 /// Splits [a, b] with breakpoints into pieces no longer than `h` (at least one per piece,
 /// up to the relative round-off [`COUNT_TOLERANCE`]).
 pub(crate) fn subdivide(breaks: &[f64], h: f64) -> Vec<f64> {
     let mut out = vec![breaks[0]];
     for w in breaks.windows(2) {
-        let ratio = (w[1] - w[0]) / h;
-        let n = (ratio * (1.0 - COUNT_TOLERANCE)).ceil().max(1.0) as usize;
+        let n = piece_count(w[0], w[1], h) as usize;
         for k in 1..=n {
             out.push(if k == n {
                 w[1]

@@ -7,6 +7,7 @@ use crate::error::{require_positive, require_within, Error, Result};
 use crate::laminate::{Laminate, Layer};
 use crate::material::{Material, Orthotropic, Plane};
 use crate::mesh::Mesh;
+use crate::sem::FineColumns;
 use std::collections::HashMap;
 
 pub(super) fn build_laminate(spec: &LaminateSpec, plane: Plane) -> Result<Laminate> {
@@ -101,13 +102,15 @@ pub(super) type Built = (Laminate, Mesh, Option<CrackPlacement>, Region);
 pub(super) const BYTES_PER_NODE: f64 = 1024.0;
 
 /// Refuses, before anything is allocated, a mesh (of `orders` GLL intervals per element along
-/// x and across, (1, 1) for T3) that is degenerate (fewer than two columns,
-/// layers that vanish in floating point) or whose estimated memory exceeds the limit
-/// ([`crate::budget::check_memory`]); the error names the fields the user wrote.
+/// x and across, (1, 1) for T3, with the band `fine_x` of narrower columns if any) that is
+/// degenerate (fewer than two columns, layers that vanish in floating point, a band outside
+/// the width) or whose estimated memory exceeds the limit ([`crate::budget::check_memory`]);
+/// the error names the fields the user wrote.
 pub(super) fn check_mesh_size(
     spec: &SceneSpec,
     laminate: &Laminate,
     orders: (usize, usize),
+    fine_x: Option<&FineColumns>,
 ) -> Result<()> {
     require_positive("element_size_x_m", spec.element_size_x_m)?;
     require_positive("element_size_y_m", spec.element_size_y_m)?;
@@ -120,6 +123,9 @@ pub(super) fn check_mesh_size(
                 spec.width_m
             ),
         ));
+    }
+    if let Some(band) = fine_x {
+        band.check(spec.width_m)?;
     }
     let interfaces = laminate.interfaces_m();
     if let Some(k) = interfaces
@@ -140,16 +146,23 @@ pub(super) fn check_mesh_size(
             ),
         ));
     }
-    let columns = (spec.width_m / spec.element_size_x_m).ceil().max(1.0);
+    let columns = crate::sem::column_count(spec.width_m, spec.element_size_x_m, fine_x);
     let rows: f64 = interfaces
         .windows(2)
         .map(|w| ((w[1] - w[0]) / spec.element_size_y_m).ceil().max(1.0))
         .sum();
     let nodes = (columns * orders.0 as f64 + 1.0) * (rows * orders.1 as f64 + 1.0);
+    let (field, band) = match fine_x {
+        None => ("element_size_x_m, element_size_y_m", String::new()),
+        Some(b) => (
+            "element_size_x_m, element_size_y_m, discretisation.fine_x.element_size_m",
+            format!(", {} m", b.element_size_m),
+        ),
+    };
     crate::budget::check_memory(
-        "element_size_x_m, element_size_y_m",
+        field,
         format!(
-            "{} m, {} m over width_m = {} m and a laminate {:e} m thick ({columns:.3e} columns x {rows:.3e} rows, {nodes:.3e} nodes at about {} each)",
+            "{} m, {} m{band} over width_m = {} m and a laminate {:e} m thick ({columns:.3e} columns x {rows:.3e} rows, {nodes:.3e} nodes at about {} each)",
             spec.element_size_x_m,
             spec.element_size_y_m,
             spec.width_m,

@@ -165,6 +165,7 @@ impl SceneSpec {
                         max_order_y: p.max_order_y,
                         extra_order_y: 0,
                         rule_order_x: None,
+                        fine_x: None,
                     },
                     ..t3
                 }
@@ -206,6 +207,7 @@ impl SceneSpec {
                 max_order_y,
                 extra_order_y,
                 rule_order_x,
+                fine_x,
             } => {
                 if order_x < 3 {
                     return Err(Error::invalid(
@@ -222,6 +224,7 @@ impl SceneSpec {
                         max_order_y,
                         extra_order_y,
                         rule_order_x: Some(rule_order_x.unwrap_or(order_x)),
+                        fine_x,
                     },
                     time_step_s: Some(dt_s),
                     ..self.clone()
@@ -233,6 +236,7 @@ impl SceneSpec {
                         max_order_y,
                         extra_order_y: extra_order_y + 1,
                         rule_order_x,
+                        fine_x,
                     },
                     time_step_s: None,
                     ..self.clone()
@@ -339,16 +343,25 @@ impl SceneSpec {
         }
     }
 
-    /// The same scene (same laminate draw) with element sizes multiplied by `factor`: the
+    /// The same scene (same laminate draw) with element sizes (a band of fine columns' too)
+    /// multiplied by `factor`: the
     /// companions of an error estimate on linear triangles and the pilots of a tolerance. A
     /// Gmsh scene has no element sizes to change (its mesh is the file's): an error.
     pub fn coarsened(&self, factor: f64) -> Result<SceneSpec> {
         if let Some(g) = &self.gmsh {
             return Err(file_mesh(g));
         }
+        let mut discretisation = self.discretisation;
+        if let DiscretisationSpec::Sem {
+            fine_x: Some(band), ..
+        } = &mut discretisation
+        {
+            band.element_size_m *= factor;
+        }
         Ok(SceneSpec {
             element_size_x_m: self.element_size_x_m * factor,
             element_size_y_m: self.element_size_y_m * factor,
+            discretisation,
             ..self.clone()
         })
     }

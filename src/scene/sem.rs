@@ -28,6 +28,7 @@ pub(super) fn build(spec: &SceneSpec, cut: &SemSpec) -> Result<Scene> {
         spec,
         &laminate,
         (cut.order_x, cut.max_order_y + cut.extra_order_y),
+        cut.fine_x.as_ref(),
     )?;
     let mut model = SemModel::layered(&laminate, spec.width_m, cut)?;
     crate::budget::check()?;

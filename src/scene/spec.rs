@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::laminate::StochasticSpec;
 use crate::material::{Orthotropic, Plane};
 use crate::mesh::Side;
-use crate::sem::SemSpec;
+use crate::sem::{FineColumns, SemSpec};
 use crate::solve::Quantity;
 use crate::transducer::TransducerSpec;
 use serde::{Deserialize, Serialize};
@@ -549,6 +549,10 @@ pub enum DiscretisationSpec {
         /// every row's order across).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         rule_order_x: Option<usize>,
+        /// A band of narrower element columns along x (none when not given; a reference
+        /// that resolves the crack's contact along x).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        fine_x: Option<FineColumns>,
     },
 }
 
@@ -571,6 +575,7 @@ impl DiscretisationSpec {
                 max_order_y,
                 extra_order_y,
                 rule_order_x,
+                fine_x,
             } => Some(SemSpec {
                 order_x,
                 min_order_y,
@@ -579,6 +584,7 @@ impl DiscretisationSpec {
                 rule_order_x,
                 element_size_x_m: spec.element_size_x_m,
                 element_size_y_m: spec.element_size_y_m,
+                fine_x,
             }),
         }
     }

@@ -18,7 +18,7 @@ fn layered_mesh(spec: &SceneSpec) -> Result<Built> {
     require_positive("width_m", spec.width_m)?;
     let laminate = build_laminate(&spec.laminate, spec.plane)?;
     let height = laminate.thickness_m();
-    check_mesh_size(spec, &laminate, (1, 1))?;
+    check_mesh_size(spec, &laminate, (1, 1), None)?;
     let mesh = Mesh::layered(
         &laminate,
         spec.width_m,

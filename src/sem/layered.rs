@@ -3,7 +3,7 @@
 
 use super::gll::Gll;
 use super::SemModel;
-use crate::error::{Error, Result};
+use crate::error::{require_positive, require_within, Error, Result};
 use crate::laminate::Laminate;
 use crate::material::Material;
 use crate::mesh::Side;
@@ -38,8 +38,12 @@ pub struct SemSpec {
     /// keep every row's order across and differ from the scene along x alone.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rule_order_x: Option<usize>,
-    /// Element width along x (m); the width is divided into equal elements no wider.
+    /// Element width along x (m); the width is divided into equal elements no wider (outside
+    /// `fine_x`).
     pub element_size_x_m: f64,
+    /// A band of narrower columns along x (none: every column at most `element_size_x_m`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fine_x: Option<FineColumns>,
     /// Largest element height across a layer (m).
     pub element_size_y_m: f64,
 }
@@ -56,7 +60,101 @@ impl Default for SemSpec {
             rule_order_x: None,
             element_size_x_m: 0.5e-3,
             element_size_y_m: 0.25e-3,
+            fine_x: None,
         }
+    }
+}
+
+/// A band of narrower element columns along x: from `from_m` to `to_m` (both column lines)
+/// columns of at most `element_size_m`, the rest of the width at the scene's element size.
+/// It puts more GLL node pairs on a crack without refining the whole width (a reference for
+/// the contact's error along x). It refines along x alone: the rule across judges the rows
+/// against the columns outside it, so they keep their orders; the narrowest column sets the
+/// time step.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FineColumns {
+    /// Left edge of the band (m from the left side).
+    pub from_m: f64,
+    /// Right edge of the band (m from the left side).
+    pub to_m: f64,
+    /// Largest element width inside the band (m).
+    pub element_size_m: f64,
+}
+
+impl FineColumns {
+    /// Refuses a band that is empty or leaves [0, `width_m`], or a size that is not a
+    /// positive length; errors name the field of `discretisation.fine_x`.
+    pub fn check(&self, width_m: f64) -> Result<()> {
+        require_positive("discretisation.fine_x.element_size_m", self.element_size_m)?;
+        require_within(
+            "discretisation.fine_x.from_m",
+            self.from_m,
+            0.0,
+            width_m,
+            "m",
+            "within the width",
+        )?;
+        require_within(
+            "discretisation.fine_x.to_m",
+            self.to_m,
+            0.0,
+            width_m,
+            "m",
+            "within the width",
+        )?;
+        if !(self.to_m > self.from_m) {
+            return Err(Error::invalid(
+                "discretisation.fine_x.to_m",
+                self.to_m,
+                format!("must be above from_m = {} m", self.from_m),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The parts of [0, `width_m`] and each one's largest element width: left of the band
+    /// at `element_size_m`, the band, right of it (empty parts left out).
+    fn parts(&self, width_m: f64, element_size_m: f64) -> Vec<(f64, f64, f64)> {
+        [
+            (0.0, self.from_m, element_size_m),
+            (self.from_m, self.to_m, self.element_size_m),
+            (self.to_m, width_m, element_size_m),
+        ]
+        .into_iter()
+        .filter(|(a, b, _)| b > a)
+        .collect()
+    }
+}
+
+/// The column lines of [0, `width_m`]: equal columns of at most `element_size_m`, those of
+/// the band `fine` (checked) of at most its size.
+pub(crate) fn column_lines(
+    width_m: f64,
+    element_size_m: f64,
+    fine: Option<&FineColumns>,
+) -> Vec<f64> {
+    let Some(band) = fine else {
+        return crate::mesh::subdivide(&[0.0, width_m], element_size_m);
+    };
+    let mut lines = vec![0.0];
+    for (a, b, h) in band.parts(width_m, element_size_m) {
+        lines.extend_from_slice(&crate::mesh::subdivide(&[a, b], h)[1..]);
+    }
+    lines
+}
+
+/// How many columns [`column_lines`] cuts, counted without building them (the memory check
+/// runs before anything is allocated).
+pub(crate) fn column_count(width_m: f64, element_size_m: f64, fine: Option<&FineColumns>) -> f64 {
+    let count = crate::mesh::piece_count;
+    match fine {
+        None => count(0.0, width_m, element_size_m),
+        Some(band) => band
+            .parts(width_m, element_size_m)
+            .into_iter()
+            .map(|(a, b, h)| count(a, b, h))
+            .sum(),
     }
 }
 
@@ -121,15 +219,19 @@ impl SemModel {
                 laminate.layers[layer].material
             })
             .collect();
-        let columns_m = crate::mesh::subdivide(&[0.0, width_m], spec.element_size_x_m);
-        let columns = columns_m.len() - 1;
+        if let Some(band) = &spec.fine_x {
+            band.check(width_m)?;
+        }
+        let columns_m = column_lines(width_m, spec.element_size_x_m, spec.fine_x.as_ref());
+        // the rows are judged against the columns without the band: it refines along x alone
+        let columns = column_count(width_m, spec.element_size_x_m, None);
         let speeds: Vec<[f64; 2]> = laminate.materials.iter().map(axis_speeds).collect();
         let fastest_x = row_material
             .iter()
             .map(|&m| speeds[m][0])
             .fold(0.0, f64::max);
         let rule_order_x = spec.rule_order_x.unwrap_or(spec.order_x).max(1);
-        let x_crossing_s = smallest_gap(width_m / columns as f64, rule_order_x) / fastest_x;
+        let x_crossing_s = smallest_gap(width_m / columns, rule_order_x) / fastest_x;
         let order_y: Vec<usize> = rows_m
             .windows(2)
             .zip(&row_material)

@@ -27,7 +27,8 @@ mod layered;
 mod memory;
 pub mod unstructured;
 
-pub use layered::SemSpec;
+pub(crate) use layered::column_count;
+pub use layered::{FineColumns, SemSpec};
 
 use crate::error::{Error, Result};
 

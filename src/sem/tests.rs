@@ -849,6 +849,7 @@ fn round_off_does_not_change_the_order_across() {
         rule_order_x: None,
         element_size_x_m: 0.5e-3,
         element_size_y_m: 0.5e-3,
+        fine_x: None,
     };
     let m = SemModel::layered(&laminate, 30e-3, &spec).unwrap();
     let orders: Vec<usize> = m.gll_y.iter().map(Gll::order).collect();
@@ -879,6 +880,7 @@ fn the_order_across_is_judged_per_material_above_a_floor() {
             rule_order_x: None,
             element_size_x_m: 0.25e-3,
             element_size_y_m: 0.25e-3,
+            fine_x: None,
         };
         let m = SemModel::layered(&lam, 2e-3, &spec).unwrap();
         m.row_orders()[4..6].to_vec()

@@ -216,6 +216,7 @@ impl WaveStrip {
             rule_order_x: None,
             element_size_x_m: width,
             element_size_y_m: width,
+            fine_x: None,
         };
         let m = trnews::sem::SemModel::layered(&laminate(layers_top_down), width, &cut).unwrap();
         WaveStrip::sem(m, shear, bottom)
