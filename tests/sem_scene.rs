@@ -111,7 +111,7 @@ fn a_sem_scene_builds_its_nodes_crack_loads_and_receivers() {
     );
 }
 
-/// `spec` on order-4 spectral elements with the band `fine_x` of narrower columns.
+/// `spec` (on spectral elements) with the band `fine_x` of narrower columns.
 fn with_fine_band(spec: &SceneSpec, from_m: f64, to_m: f64, element_size_m: f64) -> SceneSpec {
     let DiscretisationSpec::Sem {
         order_x,

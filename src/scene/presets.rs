@@ -344,9 +344,9 @@ impl SceneSpec {
     }
 
     /// The same scene (same laminate draw) with element sizes (a band of fine columns' too)
-    /// multiplied by `factor`: the
-    /// companions of an error estimate on linear triangles and the pilots of a tolerance. A
-    /// Gmsh scene has no element sizes to change (its mesh is the file's): an error.
+    /// multiplied by `factor`: the companions of an error estimate on linear triangles and
+    /// the pilots of a tolerance. A Gmsh scene has no element sizes to change (its mesh is
+    /// the file's): an error.
     pub fn coarsened(&self, factor: f64) -> Result<SceneSpec> {
         if let Some(g) = &self.gmsh {
             return Err(file_mesh(g));
